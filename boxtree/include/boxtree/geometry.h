@@ -1,0 +1,45 @@
+#pragma once
+// Exact-as-practical tests between one triangle and a query shape. These are the leaf tests of
+// every query and the reference that the brute-force cross-checks use; all are closed sets
+// (touching counts as overlapping). Triangles may be degenerate (zero area); no test divides by
+// zero or returns NaN for them.
+#include "boxtree/shapes.h"
+#include "boxtree/volume/aabb.h"
+
+namespace boxtree {
+
+// Barycentric hit: point = (1-u-v)*a + u*b + v*c = ray.origin + t*ray.direction.
+struct TriangleHit {
+  Real t = 0;
+  Real u = 0;
+  Real v = 0;
+};
+
+// Watertight, two-sided ray/triangle test (Woop, Benthin, Wald, "Watertight Ray/Triangle
+// Intersection", JCGT 2013): a ray through a shared edge or vertex of a closed mesh hits at
+// least one of the facets around it. Hits with t in [ray.t_min, ray.t_max] only; edges and
+// corners are inclusive. Degenerate triangles are never hit. On a hit fills `hit`.
+bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const Vec3& c, TriangleHit& hit);
+
+// Triangle/triangle intersection (closed: touching at a point counts). Handles coplanar and
+// degenerate triangles (Guigue & Devillers 2003, with coplanar and degenerate fallbacks).
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
+                         const Vec3& b0, const Vec3& b1, const Vec3& b2);
+
+// Separating-axis test of a triangle against a closed box (Akenine-Moller 2001, 13 axes).
+bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box);
+bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box);
+bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& sphere);
+bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule);
+// True if the triangle touches the plane or has corners on both sides of it.
+bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane);
+
+// Closest point of the (possibly degenerate) triangle to p (Ericson, Real-Time Collision
+// Detection, 5.1.5).
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+// Squared distance between segments [p0,p1] and [q0,q1] (Ericson 5.1.9), robust for zero-length segments.
+Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1);
+// Squared distance between a segment and a triangle (0 if they intersect).
+Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace boxtree

@@ -1,0 +1,51 @@
+#pragma once
+// An indexed triangle mesh: the input a boxtree is built over.
+// Facet ids are indices into `triangles`, in the order of the source file (polygons are
+// fan-triangulated in order), so that the ids a query reports mean something to the user.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace boxtree {
+
+using Real = double;
+using Vec3 = Eigen::Matrix<Real, 3, 1>;
+using Mat3 = Eigen::Matrix<Real, 3, 3>;
+using FacetId = std::uint32_t;
+using VertexId = std::uint32_t;
+using Triangle = std::array<VertexId, 3>;
+
+struct TriangleMesh {
+  std::vector<Vec3> vertices;
+  std::vector<Triangle> triangles;
+
+  std::size_t facet_count() const { return triangles.size(); }
+  const Vec3& corner(FacetId facet, int k) const { return vertices[triangles[facet][k]]; }
+};
+
+// What validation found that is legal but worth reporting.
+struct MeshStats {
+  std::size_t facets = 0;
+  std::size_t vertices = 0;
+  std::size_t degenerate_facets = 0;  // zero area: repeated index or collinear corners
+  std::size_t unused_vertices = 0;    // referenced by no facet
+  Vec3 bounds_min = Vec3::Zero();     // over the vertices that facets use
+  Vec3 bounds_max = Vec3::Zero();
+  Real total_area = 0;
+};
+
+// Throws boxtree::Error, naming `source` (a file name or "mesh") and the offending facet or
+// vertex, when: there are no facets, an index is out of range, or a used vertex has a NaN/Inf
+// coordinate. Degenerate facets are accepted (counted by compute_mesh_stats).
+void validate_mesh(const TriangleMesh& mesh, const std::string& source = "mesh");
+
+// Assumes a valid mesh.
+MeshStats compute_mesh_stats(const TriangleMesh& mesh);
+
+// Twice the area of a facet's triangle is |(b-a)x(c-a)|; zero means degenerate.
+Real facet_area(const TriangleMesh& mesh, FacetId facet);
+
+}  // namespace boxtree
