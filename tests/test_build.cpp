@@ -1,1 +1,153 @@
+// Builder: structural invariants on every kind of mesh, the O(log n) height, determinism, errors.
 #include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "boxtree/build.h"
+#include "boxtree/stats.h"
+#include "boxtree/volume/aabb.h"
+#include "support/meshes.h"
+
+namespace boxtree {
+namespace {
+
+// Height bound the builder guarantees: each round pairs at least a quarter of the nodes.
+int guaranteed_height_bound(std::size_t n) {
+  return n <= 1 ? 0 : int(std::ceil(std::log(double(n)) / std::log(4.0 / 3.0)));
+}
+
+void expect_valid(const Tree<Aabb>& tree, const std::string& name) {
+  EXPECT_EQ(validate_tree(tree), "") << name;
+  const std::size_t n = tree.facet_count();
+  EXPECT_EQ(tree.node_count(), 2 * n - 1) << name;
+  EXPECT_LE(tree.height(), guaranteed_height_bound(n)) << name;
+}
+
+TEST(Build, InvariantsOnProceduralMeshes) {
+  for (const auto& [name, mesh] : test::procedural_meshes()) {
+    for (MergeCost cost : {MergeCost::surface_area, MergeCost::volume}) {
+      BuildSettings settings;
+      settings.cost = cost;
+      BuildStats stats;
+      const Tree<Aabb> tree = build_tree<Aabb>(mesh, settings, &stats);
+      expect_valid(tree, name);
+      EXPECT_EQ(stats.rounds, tree.facet_count() > 1 ? stats.rounds : 0);
+    }
+  }
+}
+
+// On surfaces the adjacency pairs almost every node each round: the height stays within a small
+// constant of log2 n (the requirement), well below the worst-case bound.
+TEST(Build, HeightNearLog2OnSurfaces) {
+  const std::pair<const char*, TriangleMesh> meshes[] = {
+      {"terrain_64x64", make_terrain(64, 64, 5)},
+      {"sphere_128x64", make_uv_sphere(128, 64)},
+      {"bumpy_sphere_100x50", make_bumpy_sphere(100, 50, 0.2, 9)},
+      {"soup_8192", make_triangle_soup(8192, 2, 1.0, 0.02)},
+  };
+  for (const auto& [name, mesh] : meshes) {
+    const Tree<Aabb> tree = build_tree<Aabb>(mesh);
+    const double log2n = std::log2(double(mesh.facet_count()));
+    EXPECT_LE(tree.height(), int(std::ceil(log2n)) + 4) << name << ": height " << tree.height() << ", log2 n " << log2n;
+    EXPECT_EQ(validate_tree(tree), "") << name;
+  }
+}
+
+TEST(Build, InvariantsOnRealMeshes) {
+  BOXTREE_REQUIRE_SHARED_MESHES();
+  for (const std::string& name : test::shared_mesh_names()) {
+    const TriangleMesh mesh = test::load_shared_mesh(name);
+    const Tree<Aabb> tree = build_tree<Aabb>(mesh);
+    expect_valid(tree, name);
+    const double log2n = std::log2(double(mesh.facet_count()));
+    EXPECT_LE(tree.height(), int(std::ceil(log2n)) + 6) << name << ": height " << tree.height();
+  }
+}
+
+TEST(Build, Deterministic) {
+  const TriangleMesh mesh = make_bumpy_sphere(60, 30, 0.25, 4);
+  const Tree<Aabb> a = build_tree<Aabb>(mesh);
+  const Tree<Aabb> b = build_tree<Aabb>(mesh);
+  ASSERT_EQ(a.node_count(), b.node_count());
+  EXPECT_EQ(a.height(), b.height());
+  for (NodeIndex i = 0; i < a.node_count(); ++i) {
+    ASSERT_EQ(a.is_leaf(i), b.is_leaf(i));
+    if (a.is_leaf(i))
+      ASSERT_EQ(a.facet(i), b.facet(i));
+    else
+      ASSERT_EQ(a.first_child(i), b.first_child(i));
+    ASSERT_EQ(a.volume(i).min, b.volume(i).min);
+    ASSERT_EQ(a.volume(i).max, b.volume(i).max);
+  }
+}
+
+// Parent box is the smallest box enclosing the children: equal to the union, not just containing it.
+TEST(Build, ParentIsSmallestEnclosingBox) {
+  const Tree<Aabb> tree = build_tree<Aabb>(make_terrain(16, 16, 1));
+  for (NodeIndex i = 0; i < tree.node_count(); ++i) {
+    if (tree.is_leaf(i)) {
+      const TriangleMesh& m = tree.mesh();
+      const FacetId f = tree.facet(i);
+      const Aabb leaf = Aabb::from_triangle(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2));
+      EXPECT_EQ(tree.volume(i).min, leaf.min);
+      EXPECT_EQ(tree.volume(i).max, leaf.max);
+      continue;
+    }
+    const NodeIndex c = tree.first_child(i);
+    const Aabb merged = Aabb::enclosing(tree.volume(c), tree.volume(c + 1));
+    EXPECT_EQ(tree.volume(i).min, merged.min);
+    EXPECT_EQ(tree.volume(i).max, merged.max);
+  }
+}
+
+// Merging neighbours keeps sibling leaves adjacent on a mesh: on a regular terrain most leaf
+// pairs share an edge (the paper's pairing of neighbouring facets).
+TEST(Build, LeafSiblingsAreNeighbours) {
+  const Tree<Aabb> tree = build_tree<Aabb>(make_terrain(32, 32, 2));
+  const TriangleMesh& m = tree.mesh();
+  std::size_t leaf_pairs = 0, sharing = 0;
+  for (NodeIndex i = 0; i < tree.node_count(); ++i) {
+    if (tree.is_leaf(i)) continue;
+    const NodeIndex c = tree.first_child(i);
+    if (!tree.is_leaf(c) || !tree.is_leaf(c + 1)) continue;
+    ++leaf_pairs;
+    int shared = 0;
+    for (VertexId v : m.triangles[tree.facet(c)])
+      for (VertexId w : m.triangles[tree.facet(c + 1)]) shared += v == w;
+    sharing += shared >= 1;
+  }
+  EXPECT_GT(leaf_pairs, m.facet_count() / 3);
+  EXPECT_EQ(sharing, leaf_pairs);
+}
+
+TEST(Build, RejectsBadMeshes) {
+  TriangleMesh empty;
+  EXPECT_THROW(build_tree<Aabb>(empty), Error);
+  TriangleMesh out_of_range;
+  out_of_range.vertices = {Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY()};
+  out_of_range.triangles = {{0, 1, 3}};
+  EXPECT_THROW(build_tree<Aabb>(out_of_range), Error);
+  TriangleMesh nan = out_of_range;
+  nan.triangles = {{0, 1, 2}};
+  nan.vertices[1].x() = std::nan("");
+  EXPECT_THROW(build_tree<Aabb>(nan), Error);
+  TriangleMesh inf = out_of_range;
+  inf.triangles = {{0, 1, 2}};
+  inf.vertices[2].z() = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(build_tree<Aabb>(inf), Error);
+  EXPECT_THROW(build_tree<Aabb>(std::shared_ptr<const TriangleMesh>()), Error);
+}
+
+// The caller's mesh is copied or shared, never modified.
+TEST(Build, LeavesCallerMeshUntouched) {
+  const TriangleMesh mesh = make_triangle_soup(200, 5);
+  const TriangleMesh copy = mesh;
+  auto shared = std::make_shared<const TriangleMesh>(mesh);
+  const Tree<Aabb> tree = build_tree<Aabb>(shared);
+  EXPECT_EQ(&tree.mesh(), shared.get());
+  EXPECT_EQ(mesh.vertices, copy.vertices);
+  EXPECT_EQ(mesh.triangles, copy.triangles);
+}
+
+}  // namespace
+}  // namespace boxtree

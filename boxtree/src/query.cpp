@@ -1,1 +1,251 @@
-// placeholder
+#include "boxtree/query.h"
+
+#include <algorithm>
+
+#include "boxtree/volume/aabb.h"
+
+namespace boxtree {
+namespace {
+
+constexpr int kStackSize = Tree<Aabb>::kMaxHeight + 2;
+
+// Depth-first walk of every node whose volume passes `node_test`; `leaf` is called for each
+// such leaf's facet and returns false to stop the walk.
+template <class Volume, class NodeTest, class Leaf>
+void walk(const Tree<Volume>& tree, NodeTest&& node_test, Leaf&& leaf, QueryStats& stats) {
+  if (tree.empty()) return;
+  NodeIndex stack[kStackSize];
+  int top = 0;
+  ++stats.volume_tests;
+  if (!node_test(tree.volume(tree.root()))) return;
+  stack[top++] = tree.root();
+  while (top > 0) {
+    const NodeIndex node = stack[--top];
+    ++stats.nodes_visited;
+    if (tree.is_leaf(node)) {
+      if (!leaf(tree.facet(node))) return;
+      continue;
+    }
+    const NodeIndex child = tree.first_child(node);
+    stats.volume_tests += 2;
+    if (node_test(tree.volume(child + 1))) stack[top++] = child + 1;
+    if (node_test(tree.volume(child))) stack[top++] = child;
+  }
+}
+
+struct StatsSink {
+  QueryStats local;
+  QueryStats* out;
+  explicit StatsSink(QueryStats* o) : out(o) {}
+  ~StatsSink() {
+    if (out) *out += local;
+  }
+};
+
+bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& s) { return triangle_overlaps_aabb(a, b, c, s); }
+bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& s) { return triangle_overlaps_obb(a, b, c, s); }
+bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& s) { return triangle_overlaps_sphere(a, b, c, s); }
+bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& s) { return triangle_overlaps_capsule(a, b, c, s); }
+
+bool valid_ray(const Ray& ray) {
+  return ray.origin.allFinite() && ray.direction.allFinite() && !std::isnan(ray.t_min) && !std::isnan(ray.t_max) &&
+         ray.t_min <= ray.t_max;
+}
+
+}  // namespace
+
+template <class Volume>
+std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+  StatsSink sink(stats);
+  if (tree.empty() || !valid_ray(ray)) return std::nullopt;
+  const TriangleMesh& mesh = tree.mesh();
+  const RayPrecomputed pre(ray);
+  std::optional<RayHit> best;
+  Real best_t = ray.t_max;
+  struct Entry {
+    NodeIndex node;
+    Real t_enter;
+  };
+  Entry stack[kStackSize];
+  int top = 0;
+  Real t_enter = 0;
+  ++sink.local.volume_tests;
+  if (!intersect_ray(tree.volume(tree.root()), pre, ray.t_min, best_t, &t_enter)) return std::nullopt;
+  stack[top++] = {tree.root(), t_enter};
+  while (top > 0) {
+    const Entry entry = stack[--top];
+    if (entry.t_enter > best_t) continue;  // a closer hit was found since this node was pushed
+    const NodeIndex node = entry.node;
+    ++sink.local.nodes_visited;
+    if (tree.is_leaf(node)) {
+      const FacetId f = tree.facet(node);
+      ++sink.local.leaf_tests;
+      TriangleHit hit;
+      Ray clipped = ray;
+      clipped.t_max = best_t;
+      if (intersect_ray_triangle(clipped, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
+        if (!best || hit.t < best_t || (hit.t == best_t && f < best->facet)) {
+          best = RayHit{f, hit.t, hit.u, hit.v};
+          best_t = hit.t;
+        }
+      }
+      continue;
+    }
+    const NodeIndex child = tree.first_child(node);
+    Real t0 = 0, t1 = 0;
+    sink.local.volume_tests += 2;
+    const bool hit0 = intersect_ray(tree.volume(child), pre, ray.t_min, best_t, &t0);
+    const bool hit1 = intersect_ray(tree.volume(child + 1), pre, ray.t_min, best_t, &t1);
+    // Push the farther child first so the nearer one is explored first.
+    if (hit0 && hit1) {
+      if (t0 <= t1) {
+        stack[top++] = {child + 1, t1};
+        stack[top++] = {child, t0};
+      } else {
+        stack[top++] = {child, t0};
+        stack[top++] = {child + 1, t1};
+      }
+    } else if (hit0) {
+      stack[top++] = {child, t0};
+    } else if (hit1) {
+      stack[top++] = {child + 1, t1};
+    }
+  }
+  return best;
+}
+
+template <class Volume>
+void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit, QueryStats* stats) {
+  StatsSink sink(stats);
+  if (tree.empty() || !valid_ray(ray)) return;
+  const TriangleMesh& mesh = tree.mesh();
+  const RayPrecomputed pre(ray);
+  walk(
+      tree, [&](const Volume& v) { return intersect_ray(v, pre, ray.t_min, ray.t_max); },
+      [&](FacetId f) {
+        ++sink.local.leaf_tests;
+        TriangleHit hit;
+        if (!intersect_ray_triangle(ray, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        return visit(RayHit{f, hit.t, hit.u, hit.v});
+      },
+      sink.local);
+}
+
+template <class Volume>
+std::optional<RayHit> ray_any_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+  std::optional<RayHit> found;
+  ray_all_hits<Volume>(
+      tree, ray,
+      [&](const RayHit& hit) {
+        found = hit;
+        return false;
+      },
+      stats);
+  return found;
+}
+
+template <class Volume>
+std::vector<RayHit> ray_all_hits(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+  std::vector<RayHit> hits;
+  ray_all_hits<Volume>(
+      tree, ray,
+      [&](const RayHit& hit) {
+        hits.push_back(hit);
+        return true;
+      },
+      stats);
+  std::sort(hits.begin(), hits.end(), [](const RayHit& x, const RayHit& y) {
+    return x.t != y.t ? x.t < y.t : x.facet < y.facet;
+  });
+  return hits;
+}
+
+template <class Volume, class Shape>
+void query_overlap(const Tree<Volume>& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                   FacetTest test) {
+  StatsSink sink(stats);
+  const TriangleMesh& mesh = tree.mesh();
+  walk(
+      tree, [&](const Volume& v) { return overlaps(v, shape); },
+      [&](FacetId f) {
+        if (test == FacetTest::exact_triangle) {
+          ++sink.local.leaf_tests;
+          if (!triangle_overlaps(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), shape)) return true;
+        }
+        return visit(f);
+      },
+      sink.local);
+}
+
+template <class Volume, class Shape>
+std::vector<FacetId> query_overlap(const Tree<Volume>& tree, const Shape& shape, QueryStats* stats, FacetTest test) {
+  std::vector<FacetId> facets;
+  query_overlap<Volume, Shape>(
+      tree, shape,
+      [&](FacetId f) {
+        facets.push_back(f);
+        return true;
+      },
+      stats, test);
+  std::sort(facets.begin(), facets.end());
+  return facets;
+}
+
+template <class Volume>
+void query_plane(const Tree<Volume>& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
+  StatsSink sink(stats);
+  const TriangleMesh& mesh = tree.mesh();
+  walk(
+      tree, [&](const Volume& v) { return overlaps(v, plane); },
+      [&](FacetId f) {
+        ++sink.local.leaf_tests;
+        if (!triangle_crosses_plane(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), plane)) return true;
+        return visit(f);
+      },
+      sink.local);
+}
+
+template <class Volume>
+std::vector<FacetId> query_plane(const Tree<Volume>& tree, const Plane& plane, QueryStats* stats) {
+  std::vector<FacetId> facets;
+  query_plane<Volume>(
+      tree, plane,
+      [&](FacetId f) {
+        facets.push_back(f);
+        return true;
+      },
+      stats);
+  std::sort(facets.begin(), facets.end());
+  return facets;
+}
+
+template <class Volume>
+std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QueryStats* stats) {
+  StatsSink sink(stats);
+  // Every node passed by the walk contains the point, inner nodes included: count them all.
+  const std::uint64_t before = sink.local.nodes_visited;
+  walk(
+      tree, [&](const Volume& v) { return contains(v, point); }, [](FacetId) { return true; }, sink.local);
+  return std::size_t(sink.local.nodes_visited - before);
+}
+
+#define BOXTREE_INSTANTIATE_QUERIES(V)                                                                            \
+  template std::optional<RayHit> ray_closest_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                     \
+  template std::optional<RayHit> ray_any_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                         \
+  template void ray_all_hits<V>(const Tree<V>&, const Ray&, FunctionRef<bool(const RayHit&)>, QueryStats*);       \
+  template std::vector<RayHit> ray_all_hits<V>(const Tree<V>&, const Ray&, QueryStats*);                          \
+  template void query_plane<V>(const Tree<V>&, const Plane&, FunctionRef<bool(FacetId)>, QueryStats*);            \
+  template std::vector<FacetId> query_plane<V>(const Tree<V>&, const Plane&, QueryStats*);                        \
+  template std::size_t stabbing_count<V>(const Tree<V>&, const Vec3&, QueryStats*);                               \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Aabb)                                                                            \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Obb)                                                                             \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Sphere)                                                                          \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Capsule)
+
+#define BOXTREE_INSTANTIATE_OVERLAP(V, S)                                                                         \
+  template void query_overlap<V, S>(const Tree<V>&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, FacetTest); \
+  template std::vector<FacetId> query_overlap<V, S>(const Tree<V>&, const S&, QueryStats*, FacetTest);
+
+BOXTREE_INSTANTIATE_QUERIES(Aabb)
+
+}  // namespace boxtree

@@ -45,7 +45,7 @@ void validate_mesh(const TriangleMesh& mesh, const std::string& source = "mesh")
 // Assumes a valid mesh.
 MeshStats compute_mesh_stats(const TriangleMesh& mesh);
 
-// Twice the area of a facet's triangle is |(b-a)x(c-a)|; zero means degenerate.
+// The area of a facet's triangle, |(b-a)x(c-a)|/2; zero means degenerate.
 Real facet_area(const TriangleMesh& mesh, FacetId facet);
 
 }  // namespace boxtree

@@ -42,8 +42,9 @@ inline Real volume(const Aabb& box) {
 inline Vec3 center(const Aabb& box) { return box.center(); }
 inline Aabb bounding_aabb(const Aabb& box) { return box; }
 
-inline bool contains(const Aabb& box, const Vec3& p) {
-  return (p.array() >= box.min.array()).all() && (p.array() <= box.max.array()).all();
+// Closed containment, up to `tolerance` (absolute, per coordinate).
+inline bool contains(const Aabb& box, const Vec3& p, Real tolerance = 0) {
+  return (p.array() >= box.min.array() - tolerance).all() && (p.array() <= box.max.array() + tolerance).all();
 }
 // `outer` contains `inner` up to `tolerance` (absolute, per coordinate).
 inline bool contains(const Aabb& outer, const Aabb& inner, Real tolerance = 0) {
@@ -77,10 +78,11 @@ struct RayPrecomputed {
       : origin(ray.origin), direction(ray.direction), inv_direction(ray.direction.cwiseInverse()) {}
 };
 
-// Slab test over [t_min, t_max]; returns false if the ray misses the closed box. Conservative:
+// Slab test over [t_min, t_max]; returns false if the ray misses the closed box, else sets
+// *t_enter (if given) to where the ray enters it (>= t_min). Conservative:
 // t_far is widened by a few ulps (Ize, "Robust BVH Ray Traversal", JCGT 2013) so rounding never
 // culls a box that the exact ray touches. Rays lying exactly in a face plane count as touching.
-inline bool intersect_ray(const Aabb& box, const RayPrecomputed& ray, Real t_min, Real t_max) {
+inline bool intersect_ray(const Aabb& box, const RayPrecomputed& ray, Real t_min, Real t_max, Real* t_enter = nullptr) {
   constexpr Real kPad = 4 * std::numeric_limits<Real>::epsilon();  // relative error of each t, with margin
   Real t_near = t_min;
   Real t_far = t_max;
@@ -96,6 +98,7 @@ inline bool intersect_ray(const Aabb& box, const RayPrecomputed& ray, Real t_min
     t_far = std::min(t_far, t1 + std::abs(t1) * kPad);
     if (t_near > t_far) return false;
   }
+  if (t_enter) *t_enter = t_near;
   return true;
 }
 

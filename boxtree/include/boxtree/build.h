@@ -1,0 +1,45 @@
+#pragma once
+// Bottom-up construction (paper, Section 3): leaves are the facets; in each round a maximal set
+// of disjoint pairs of neighbouring nodes is merged, cheapest merged volume first, and unpaired
+// nodes are carried to the next round.
+#include <memory>
+
+#include "boxtree/tree.h"
+
+namespace boxtree {
+
+// What a pair costs: the merged volume's surface area (default; by Cauchy's formula it is
+// proportional to the chance that a random plane cuts it, paper Section 4) or its volume.
+enum class MergeCost { surface_area, volume };
+
+struct BuildSettings {
+  MergeCost cost = MergeCost::surface_area;
+  // Besides mesh adjacency, each node is offered as partner to its `near_window` successors in
+  // a Morton (Z-order) ordering of node centres. This pairs nodes that are near but not
+  // connected (triangle soups, separate components) and guarantees that every round pairs at
+  // least a quarter of the nodes, so the height stays O(log n).
+  int near_window = 2;
+  // Nodes keep at most this many adjacency candidates (the cheapest), bounding the work per
+  // round around high-valence vertices (e.g. the apex of a cone).
+  int max_neighbors = 16;
+};
+
+struct BuildStats {
+  int rounds = 0;
+  std::size_t candidate_pairs = 0;  // summed over rounds
+  double seconds = 0;
+};
+
+// Validates the mesh (throws boxtree::Error, see validate_mesh) and builds its tree.
+// Deterministic: the same mesh and settings give the same tree.
+template <class Volume>
+Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh, const BuildSettings& settings = {},
+                        BuildStats* stats = nullptr);
+
+// Convenience: copies the mesh into the tree.
+template <class Volume>
+Tree<Volume> build_tree(const TriangleMesh& mesh, const BuildSettings& settings = {}, BuildStats* stats = nullptr) {
+  return build_tree<Volume>(std::make_shared<const TriangleMesh>(mesh), settings, stats);
+}
+
+}  // namespace boxtree

@@ -1,0 +1,41 @@
+#pragma once
+// Tree statistics (the paper's measures, Section 4) and a full structural check.
+#include <string>
+#include <vector>
+
+#include "boxtree/tree.h"
+
+namespace boxtree {
+
+// Level = height of a node's subtree: leaves are level 0, the root is level height(). This is
+// the paper's "level" counted from the bottom, where Figures 3-4 compare the methods.
+struct LevelStats {
+  int level = 0;
+  std::size_t nodes = 0;
+  Real avg_area = 0;    // mean surface area of the level's volumes
+  Real avg_volume = 0;  // mean volume
+};
+
+struct TreeStats {
+  std::size_t facets = 0;
+  std::size_t nodes = 0;
+  int height = 0;
+  std::size_t memory_bytes = 0;  // the hierarchy (volumes + links), not the mesh
+  std::size_t mesh_bytes = 0;    // the mesh's vertex and index arrays
+  std::vector<LevelStats> levels;
+  // Expected number of nodes a random plane cuts, sum_v S_v / S_root (paper Section 4, by
+  // Cauchy's formula for planes uniform among those cutting the root volume).
+  Real plane_cost = 0;
+};
+
+template <class Volume>
+TreeStats compute_tree_stats(const Tree<Volume>& tree);
+
+// Checks every structural invariant and returns a description of the first violation, or an
+// empty string: 2n-1 nodes; every facet in exactly one leaf; every node reachable exactly once;
+// every child volume inside its parent (up to `tolerance`, relative to the root's size); every
+// leaf volume contains its facet's corners; the stored height is the real height.
+template <class Volume>
+std::string validate_tree(const Tree<Volume>& tree, Real tolerance = 1e-12);
+
+}  // namespace boxtree

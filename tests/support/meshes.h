@@ -1,0 +1,88 @@
+#pragma once
+// Test meshes: procedural ones (always there) and the real ones in ../shared/meshes (tests that
+// need them skip with a message when the folder is absent).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "boxtree/generate.h"
+#include "boxtree/io.h"
+
+namespace boxtree::test {
+
+inline std::string shared_mesh_dir() { return BOXTREE_SHARED_MESHES; }
+
+inline bool shared_meshes_available() { return std::filesystem::exists(shared_mesh_dir() + "/stanford_bunny.obj"); }
+
+// Every shared mesh, by file name.
+inline std::vector<std::string> shared_mesh_names() {
+  return {"stanford_bunny.obj",        "stanford_bunny_res2.obj",   "stanford_bunny_res3.obj",
+          "stanford_bunny_res4.obj",   "bunny_libigl_closed.obj",   "ode_bunny.obj",
+          "stanford_armadillo_86k.obj", "stanford_dragon_res3.obj", "utah_teapot.obj",
+          "suzanne.obj",               "spot.obj",                  "env.obj",
+          "rob.obj",                   "bullet_diff_ring.obj",      "bullet_kiva_pod_lowres.obj",
+          "bullet_leoTest1.obj"};
+}
+
+inline TriangleMesh load_shared_mesh(const std::string& name) { return load_mesh(shared_mesh_dir() + "/" + name); }
+
+#define BOXTREE_REQUIRE_SHARED_MESHES()                                                                  \
+  do {                                                                                                   \
+    if (!::boxtree::test::shared_meshes_available())                                                    \
+      GTEST_SKIP() << "real meshes not found in " << ::boxtree::test::shared_mesh_dir() << ": skipped";  \
+  } while (false)
+
+// Multiplies test sizes (env BOXTREE_TEST_SCALE, default 1) for longer local runs.
+inline double test_scale() {
+  const char* s = std::getenv("BOXTREE_TEST_SCALE");
+  return s ? std::max(0.01, std::atof(s)) : 1.0;
+}
+
+// A cone over a regular polygon: every facet shares the apex (paper, Section 5).
+inline TriangleMesh make_cone(int sides) {
+  TriangleMesh mesh;
+  const double pi = std::acos(-1.0);
+  mesh.vertices.push_back(Vec3(0, 0, 1));
+  for (int i = 0; i < sides; ++i) mesh.vertices.push_back(Vec3(std::cos(2 * pi * i / sides), std::sin(2 * pi * i / sides), 0));
+  for (int i = 0; i < sides; ++i)
+    mesh.triangles.push_back({0, VertexId(1 + i), VertexId(1 + (i + 1) % sides)});
+  return mesh;
+}
+
+// Procedural meshes of every flavour the builder must handle, by name.
+inline std::vector<std::pair<std::string, TriangleMesh>> procedural_meshes() {
+  std::vector<std::pair<std::string, TriangleMesh>> meshes;
+  meshes.emplace_back("sphere_16x8", make_uv_sphere(16, 8));
+  meshes.emplace_back("bumpy_sphere_40x20", make_bumpy_sphere(40, 20, 0.3, 7));
+  meshes.emplace_back("terrain_24x24", make_terrain(24, 24, 3));
+  meshes.emplace_back("soup_1500", make_triangle_soup(1500, 11, 1.0, 0.08));
+  meshes.emplace_back("cone_300", make_cone(300));
+  {
+    TriangleMesh one;
+    one.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+    one.triangles = {{0, 1, 2}};
+    meshes.emplace_back("single_facet", one);
+  }
+  {
+    // Degenerate facets only: a point, and segments.
+    TriangleMesh degenerate;
+    degenerate.vertices = {Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(2, 2, 2), Vec3(0.5, 0.5, 0.5)};
+    degenerate.triangles = {{0, 0, 0}, {0, 1, 2}, {1, 2, 3}, {3, 3, 1}};
+    meshes.emplace_back("all_degenerate", degenerate);
+  }
+  {
+    // Duplicate facets and a far offset.
+    TriangleMesh dup = make_uv_sphere(8, 4, 1, Vec3(1e6, -1e6, 1e6));
+    const std::size_t n = dup.triangles.size();
+    for (std::size_t i = 0; i < n; ++i) dup.triangles.push_back(dup.triangles[i]);
+    meshes.emplace_back("duplicates_far", dup);
+  }
+  return meshes;
+}
+
+}  // namespace boxtree::test
