@@ -70,5 +70,30 @@ TEST(Stats, PlaneCostIsTheExpectedCountOfRandomLineCuts) {
   EXPECT_NEAR(mean, s.plane_cost, 0.03 * s.plane_cost) << "sampled " << mean << " vs formula " << s.plane_cost;
 }
 
+// Random planes (uniform normal, uniform offset: the motion-invariant measure) that cut the
+// root cut on average sum W_v / W_root volumes, W = mean width (Crofton) -- not sum S_v / S_root.
+TEST(Stats, MeanWidthCostIsTheExpectedCountOfRandomPlaneCuts) {
+  const Tree<Aabb> tree = build_tree<Aabb>(make_bumpy_sphere(24, 12, 0.3, 5));
+  const TreeStats s = compute_tree_stats(tree);
+  const Aabb root = tree.volume(tree.root());
+  const Vec3 centre = root.center();
+  const double radius = root.extent().norm() / 2;
+  Random r(4);
+  double cut_total = 0;
+  int planes = 0;
+  while (planes < 20000) {
+    Plane plane{r.unit_vector(), 0};
+    plane.offset = plane.normal.dot(centre) + r.uniform(-radius, radius);
+    if (!overlaps(root, plane)) continue;
+    ++planes;
+    for (NodeIndex node = 0; node < tree.node_count(); ++node) cut_total += overlaps(tree.volume(node), plane);
+  }
+  const double mean = cut_total / planes;
+  EXPECT_NEAR(mean, s.plane_cost_mean_width, 0.03 * s.plane_cost_mean_width)
+      << "sampled " << mean << " vs formula " << s.plane_cost_mean_width;
+  // The two measures really differ on this tree, so the check above can tell them apart.
+  EXPECT_GT(std::abs(s.plane_cost - s.plane_cost_mean_width), 0.1 * s.plane_cost_mean_width);
+}
+
 }  // namespace
 }  // namespace boxtree

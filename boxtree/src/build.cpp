@@ -16,7 +16,7 @@
 #include <chrono>
 #include <numeric>
 
-#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/volume.h"
 
 namespace boxtree {
 namespace {

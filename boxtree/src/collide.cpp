@@ -5,7 +5,7 @@
 
 #include <Eigen/LU>
 
-#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/volume.h"
 
 namespace boxtree {
 

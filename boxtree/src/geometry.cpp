@@ -1,1 +1,646 @@
-// placeholder
+// Leaf tests between one triangle and a query shape (geometry.h), and the out-of-line overlap
+// tests of volume/aabb.h.
+//
+// Conventions shared by everything below:
+//  * Every test is closed: touching counts as overlapping.
+//  * Predicates are signs of small polynomials in coordinate differences (orientation
+//    determinants), never comparisons of divided quantities. They are therefore exact whenever
+//    those polynomials are computed exactly — e.g. for small-integer or dyadic coordinates, which
+//    is where touching and coplanar configurations really occur (grids, CAD meshes), and what the
+//    tests use to check the touching cases exactly.
+//  * A triangle whose cross product (b - a) x (c - a) is exactly zero is degenerate and is treated
+//    as the segment or point it is (except by the ray test, which never hits it).
+//  * No heap allocation and no exceptions: these run in the inner loops of every query.
+#include "boxtree/geometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace boxtree {
+namespace {
+
+using Vec2 = Eigen::Matrix<Real, 2, 1>;
+
+bool is_zero(const Vec3& v) { return v.x() == 0 && v.y() == 0 && v.z() == 0; }
+
+// ((b - a) x (c - a)) . (d - a): positive when d lies on the side of the plane (a, b, c) that the
+// normal (b - a) x (c - a) points to, zero when the four points are coplanar.
+Real orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
+// Twice the signed area of the 2D triangle (a, b, c): positive when counter-clockwise.
+Real orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+bool strictly_same_sign(Real x, Real y) { return (x > 0 && y > 0) || (x < 0 && y < 0); }
+bool mixed_signs(Real x, Real y, Real z) { return (x < 0 || y < 0 || z < 0) && (x > 0 || y > 0 || z > 0); }
+
+// Projection onto the coordinate plane that drops the axis where `normal` is largest. A triangle
+// with that normal keeps a non-zero projected area: its doubled signed area becomes n_k, computed
+// by the very same products (the kept axes are cyclic after k), so it is non-zero whenever n is.
+struct Projection {
+  int i;
+  int j;
+  Vec2 operator()(const Vec3& p) const { return {p[i], p[j]}; }
+};
+
+Projection dominant_projection(const Vec3& normal) {
+  const Vec3 m = normal.cwiseAbs();
+  const int k = m.x() >= m.y() ? (m.x() >= m.z() ? 0 : 2) : (m.y() >= m.z() ? 1 : 2);
+  return {(k + 1) % 3, (k + 2) % 3};
+}
+
+// Closed 2D segment intersection from four orientation signs; a zero-length segment is fine (its
+// two orientations are equal, so it is either rejected or falls into the collinear case).
+bool segments_intersect_2d(const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& s) {
+  const Real o1 = orient2d(p, q, r);
+  const Real o2 = orient2d(p, q, s);
+  if (strictly_same_sign(o1, o2)) return false;
+  const Real o3 = orient2d(r, s, p);
+  const Real o4 = orient2d(r, s, q);
+  if (strictly_same_sign(o3, o4)) return false;
+  if ((o1 == 0 && o2 == 0) || (o3 == 0 && o4 == 0)) {
+    // All four points on one line: the segments meet iff their bounding boxes do.
+    return std::max(std::min(p.x(), q.x()), std::min(r.x(), s.x())) <=
+               std::min(std::max(p.x(), q.x()), std::max(r.x(), s.x())) &&
+           std::max(std::min(p.y(), q.y()), std::min(r.y(), s.y())) <=
+               std::min(std::max(p.y(), q.y()), std::max(r.y(), s.y()));
+  }
+  return true;
+}
+
+// Closed point-in-triangle for either winding. A projected triangle of zero area contains nothing
+// here; callers also test its edges, which is where such a point would be.
+bool point_in_triangle_2d(const Vec2& x, const Vec2& a, const Vec2& b, const Vec2& c) {
+  if (orient2d(a, b, c) == 0) return false;
+  return !mixed_signs(orient2d(a, b, x), orient2d(b, c, x), orient2d(c, a, x));
+}
+
+bool segment_meets_triangle_2d(const Vec2& s, const Vec2& e, const Vec2& a, const Vec2& b, const Vec2& c) {
+  return point_in_triangle_2d(s, a, b, c) || point_in_triangle_2d(e, a, b, c) ||
+         segments_intersect_2d(s, e, a, b) || segments_intersect_2d(s, e, b, c) ||
+         segments_intersect_2d(s, e, c, a);
+}
+
+bool triangles_intersect_2d(const Vec2 (&p)[3], const Vec2 (&q)[3]) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (segments_intersect_2d(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3])) return true;
+    }
+  }
+  // No boundary crossing: they meet only if one lies inside the other.
+  return point_in_triangle_2d(p[0], q[0], q[1], q[2]) || point_in_triangle_2d(q[0], p[0], p[1], p[2]);
+}
+
+// Closed segment [s, e] (possibly a point) against the non-degenerate triangle (a, b, c) with
+// normal n = (b - a) x (c - a). Orientation-only version of Ericson 5.3.4 (line vs triangle by
+// scalar triple products), restricted to the segment by the signs of its ends w.r.t. the plane.
+bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c,
+                            const Vec3& n) {
+  const Real os = n.dot(s - a);
+  const Real oe = n.dot(e - a);
+  if (strictly_same_sign(os, oe)) return false;
+  if (os == 0 && oe == 0) {
+    const Projection proj = dominant_projection(n);
+    return segment_meets_triangle_2d(proj(s), proj(e), proj(a), proj(b), proj(c));
+  }
+  // The line crosses the plane at a single point, which lies on the segment. It is in the closed
+  // triangle iff the line passes on the same side of (or through) all three directed edges.
+  return !mixed_signs(orient3d(s, e, a, b), orient3d(s, e, b, c), orient3d(s, e, c, a));
+}
+
+// x on the closed segment [a, b], a != b.
+bool point_on_segment(const Vec3& x, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const Vec3 ax = x - a;
+  if (!is_zero(ab.cross(ax))) return false;
+  const Real t = ax.dot(ab);
+  return t >= 0 && t <= ab.squaredNorm();
+}
+
+// Closed 3D segment intersection, either segment possibly a point.
+bool segments_meet(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d = p1 - p0;
+  const Vec3 e = q1 - q0;
+  const Vec3 w = q0 - p0;
+  const Vec3 n = d.cross(e);
+  if (!is_zero(n)) {
+    if (w.dot(n) != 0) return false;  // skew lines
+    // p0 + s d = q0 + t e with s = ((w x e).n) / n.n and t = ((w x d).n) / n.n (Cramer).
+    const Real nn = n.squaredNorm();
+    const Real s = w.cross(e).dot(n);
+    const Real t = w.cross(d).dot(n);
+    return s >= 0 && s <= nn && t >= 0 && t <= nn;
+  }
+  const bool d_zero = is_zero(d);
+  const bool e_zero = is_zero(e);
+  if (d_zero && e_zero) return is_zero(w);
+  if (d_zero) return point_on_segment(p0, q0, q1);
+  if (e_zero) return point_on_segment(q0, p0, p1);
+  // Parallel: they meet iff collinear and their projections on d overlap.
+  if (!is_zero(w.cross(d))) return false;
+  const Real b0 = w.dot(d);
+  const Real b1 = (q1 - p0).dot(d);
+  return std::min(b0, b1) <= d.squaredNorm() && std::max(b0, b1) >= 0;
+}
+
+// The two corners of a degenerate (collinear) triangle that are farthest apart: the segment the
+// triangle is. A point when all three corners coincide.
+std::pair<Vec3, Vec3> degenerate_extent(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Real ab = (b - a).squaredNorm();
+  const Real bc = (c - b).squaredNorm();
+  const Real ca = (a - c).squaredNorm();
+  if (ab >= bc && ab >= ca) return {a, b};
+  if (bc >= ca) return {b, c};
+  return {c, a};
+}
+
+Vec3 closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const Real len2 = ab.squaredNorm();
+  if (!(len2 > 0)) return a;
+  const Real t = std::clamp((p - a).dot(ab) / len2, Real(0), Real(1));
+  return a + t * ab;
+}
+
+Real squared_distance_to_box(const Vec3& p, const Aabb& box) {
+  return (p.cwiseMax(box.min).cwiseMin(box.max) - p).squaredNorm();
+}
+
+// Relative slack for tests that must never miss a true contact: a few hundred ulps of the
+// magnitudes involved, far below any modelling tolerance and above the rounding of the
+// computation it protects.
+constexpr Real kContactSlack = 256 * std::numeric_limits<Real>::epsilon();
+
+// Squared distance from the segment [p0, p1] to the closed box. The squared distance along the
+// segment is a convex piecewise quadratic of t whose pieces change only where a coordinate crosses
+// a box face, so the minimum is the best of the per-piece minimizers (exact up to rounding).
+Real segment_box_squared_distance(const Vec3& p0, const Vec3& p1, const Aabb& box) {
+  const Vec3 d = p1 - p0;
+  Real breaks[8];
+  int count = 0;
+  breaks[count++] = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0) continue;
+    for (const Real bound : {box.min[k], box.max[k]}) {
+      const Real t = (bound - p0[k]) / d[k];
+      if (t > 0 && t < 1) breaks[count++] = t;
+    }
+  }
+  breaks[count++] = 1;
+  std::sort(breaks, breaks + count);
+  Real best = std::numeric_limits<Real>::infinity();
+  for (int piece = 0; piece + 1 < count; ++piece) {
+    const Real t0 = breaks[piece];
+    const Real t1 = breaks[piece + 1];
+    const Real mid = Real(0.5) * (t0 + t1);
+    // On this piece each coordinate is below, inside or above the box: minimize the sum of the
+    // squared excesses of the outside ones, a quadratic in t.
+    Real num = 0;
+    Real den = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Real x = p0[k] + mid * d[k];
+      const Real bound = x < box.min[k] ? box.min[k] : (x > box.max[k] ? box.max[k] : x);
+      if (bound == x) continue;
+      num -= d[k] * (p0[k] - bound);
+      den += d[k] * d[k];
+    }
+    const Real t = den > 0 ? std::clamp(num / den, t0, t1) : t0;
+    best = std::min(best, squared_distance_to_box(p0 + t * d, box));
+    if (best == 0) break;
+  }
+  return best;
+}
+
+// Separating-axis test of an axis-aligned box (half extents ha, at the origin) against a box with
+// center t, axes r.col(j) and half extents hb, all in the first box's frame (Gottschalk, Lin,
+// Manocha, "OBBTree", SIGGRAPH 1996, Sec. 4; Ericson 4.4.1). 15 axes: 3 + 3 face normals and the
+// 9 edge cross products. Exact for exactly represented inputs apart from the epsilon below, which
+// only ever turns "separated" into "overlapping".
+bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb) {
+  // Gottschalk's epsilon on |R|: when two edges are (nearly) parallel their cross product is
+  // (nearly) zero and rounding noise in R alone could decide the test; padding the radii keeps it
+  // conservative. Axes whose cross product is zero to working precision are skipped outright:
+  // they carry no separating information, and for boxes that are flat in two axes the padded
+  // radius would still be zero.
+  constexpr Real kEps = 1e-12;
+  constexpr Real kParallelSquared = 1e-24;
+  Mat3 abs_r;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) abs_r(i, j) = std::abs(r(i, j)) + kEps;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(t[i]) > ha[i] + hb.dot(abs_r.row(i))) return false;
+  }
+  for (int j = 0; j < 3; ++j) {
+    if (std::abs(t.dot(r.col(j))) > ha.dot(abs_r.col(j)) + hb[j]) return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3;
+    const int i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3;
+      const int j2 = (j + 2) % 3;
+      // L = A_i x B_j has components L[i1] = -r(i2, j), L[i2] = r(i1, j) in A's frame.
+      if (r(i1, j) * r(i1, j) + r(i2, j) * r(i2, j) <= kParallelSquared) continue;
+      const Real distance = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
+      const Real ra = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
+      const Real rb = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
+      if (distance > ra + rb) return false;
+    }
+  }
+  return true;
+}
+
+// Watertight ray/triangle (Woop, Benthin, Wald, JCGT 2013): the edge function of the directed
+// edge p -> q in the sheared 2D frame, U = qx*py - qy*px for the edge opposite a (the paper's
+// Fig. 5). Two triangles sharing an edge must get exactly opposite values, so the products are
+// always formed in one canonical operand order; that keeps the property even if the compiler
+// contracts them into a fused multiply-add.
+Real edge_function(Real px, Real py, Real qx, Real qy) {
+  const bool p_first = px < qx || (px == qx && py < qy);
+  const Real fx = p_first ? px : qx;
+  const Real fy = p_first ? py : qy;
+  const Real sx = p_first ? qx : px;
+  const Real sy = p_first ? qy : py;
+  const Real m1 = fx * sy;
+  const Real m2 = fy * sx;
+  Real det = m1 - m2;  // fx*sy - fy*sx
+  if (det == 0) {
+    // The paper redoes a zero result in higher precision to get the true sign (Sec. 3.3). For
+    // doubles, long double is no help (x87 has 64 mantissa bits, a product needs 106; elsewhere
+    // it is just double), so take the exact route: here m1 == m2, hence the true value is the
+    // difference of the two rounding errors, each exact by FMA (Ogita, Rump, Oishi 2005, TwoProduct),
+    // and its rounded difference has the true sign. Rare, so the software FMA cost is irrelevant.
+    det = std::fma(fx, sy, -m1) - std::fma(fy, sx, -m2);
+  }
+  return p_first ? -det : det;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Ray / triangle
+
+bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const Vec3& c, TriangleHit& hit) {
+  const Vec3& dir = ray.direction;
+  // Sec. 3.1: the dominant direction axis becomes z; swapping x and y for a negative z keeps the
+  // winding (only a culling test would care, but it costs nothing).
+  const Vec3 abs_dir = dir.cwiseAbs();
+  const int kz = abs_dir.x() >= abs_dir.y() ? (abs_dir.x() >= abs_dir.z() ? 0 : 2) : (abs_dir.y() >= abs_dir.z() ? 1 : 2);
+  if (!(abs_dir[kz] > 0)) return false;  // zero or NaN direction
+  int kx = (kz + 1) % 3;
+  int ky = (kx + 1) % 3;
+  if (dir[kz] < 0) std::swap(kx, ky);
+  const Real shear_x = dir[kx] / dir[kz];
+  const Real shear_y = dir[ky] / dir[kz];
+  const Real shear_z = 1 / dir[kz];
+
+  // Vertices relative to the origin, sheared so that the ray becomes the +z axis. Each vertex is
+  // transformed by the same expression regardless of the triangle, so shared vertices agree.
+  const Vec3 pa = a - ray.origin;
+  const Vec3 pb = b - ray.origin;
+  const Vec3 pc = c - ray.origin;
+  const Real ax = pa[kx] - shear_x * pa[kz];
+  const Real ay = pa[ky] - shear_y * pa[kz];
+  const Real bx = pb[kx] - shear_x * pb[kz];
+  const Real by = pb[ky] - shear_y * pb[kz];
+  const Real cx = pc[kx] - shear_x * pc[kz];
+  const Real cy = pc[ky] - shear_y * pc[kz];
+
+  // Scaled barycentrics: u_a, u_b, u_c weight the corners a, b, c.
+  const Real u_a = edge_function(bx, by, cx, cy);
+  const Real u_b = edge_function(cx, cy, ax, ay);
+  const Real u_c = edge_function(ax, ay, bx, by);
+  // Two-sided and closed: reject only a mix of strictly positive and strictly negative.
+  if (mixed_signs(u_a, u_b, u_c)) return false;
+  const Real det = u_a + u_b + u_c;
+  if (det == 0) return false;  // ray in the triangle's plane, or a degenerate projection
+
+  const Real t_scaled = u_a * (shear_z * pa[kz]) + u_b * (shear_z * pb[kz]) + u_c * (shear_z * pc[kz]);
+  const Real inv_det = 1 / det;
+  const Real t = t_scaled * inv_det;
+  if (!(t >= ray.t_min && t <= ray.t_max)) return false;  // also rejects NaN
+  // Degenerate triangles are never hit. Tested last: rounding of the shear can give a collinear
+  // triangle a tiny non-zero projected area, and the check is only needed for would-be hits.
+  if (is_zero((b - a).cross(c - a))) return false;
+  hit.t = t;
+  hit.u = u_b * inv_det;
+  hit.v = u_c * inv_det;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Triangle / triangle
+
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
+                         const Vec3& b0, const Vec3& b1, const Vec3& b2) {
+  const Vec3 na = (a1 - a0).cross(a2 - a0);
+  const Vec3 nb = (b1 - b0).cross(b2 - b0);
+  const bool a_flat = is_zero(na);
+  const bool b_flat = is_zero(nb);
+  if (a_flat || b_flat) {
+    // A degenerate triangle is the segment (or point) between its two farthest corners.
+    if (a_flat && b_flat) {
+      const auto [sa, ea] = degenerate_extent(a0, a1, a2);
+      const auto [sb, eb] = degenerate_extent(b0, b1, b2);
+      return segments_meet(sa, ea, sb, eb);
+    }
+    if (a_flat) {
+      const auto [s, e] = degenerate_extent(a0, a1, a2);
+      return segment_meets_triangle(s, e, b0, b1, b2, nb);
+    }
+    const auto [s, e] = degenerate_extent(b0, b1, b2);
+    return segment_meets_triangle(s, e, a0, a1, a2, na);
+  }
+
+  // Guigue & Devillers, "Fast and Robust Triangle-Triangle Overlap Test Using Orientation
+  // Predicates", JGT 8(1), 2003. First: sides of each triangle's corners w.r.t. the other plane.
+  const Vec3 a[3] = {a0, a1, a2};
+  const Vec3 b[3] = {b0, b1, b2};
+  Real side_b[3];  // orient3d(a0, a1, a2, b_i)
+  Real side_a[3];  // orient3d(b0, b1, b2, a_i)
+  for (int i = 0; i < 3; ++i) side_b[i] = na.dot(b[i] - a0);
+  if ((side_b[0] > 0 && side_b[1] > 0 && side_b[2] > 0) || (side_b[0] < 0 && side_b[1] < 0 && side_b[2] < 0)) {
+    return false;
+  }
+  bool coplanar = side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0;
+  if (!coplanar) {
+    for (int i = 0; i < 3; ++i) side_a[i] = nb.dot(a[i] - b0);
+    if ((side_a[0] > 0 && side_a[1] > 0 && side_a[2] > 0) || (side_a[0] < 0 && side_a[1] < 0 && side_a[2] < 0)) {
+      return false;
+    }
+    // Rounding can make one triangle look coplanar with the other but not vice versa; both
+    // answers are within rounding, take the coplanar test.
+    coplanar = side_a[0] == 0 && side_a[1] == 0 && side_a[2] == 0;
+  }
+  if (coplanar) {
+    const Projection proj = dominant_projection(na);
+    const Vec2 pa[3] = {proj(a0), proj(a1), proj(a2)};
+    const Vec2 pb[3] = {proj(b0), proj(b1), proj(b2)};
+    return triangles_intersect_2d(pa, pb);
+  }
+
+  // Each triangle now straddles or touches the other's plane. Pick in each a pivot corner that is
+  // alone on its (closed) side, so that the two edges leaving it cut the other plane at the two
+  // ends of the triangle's interval on the planes' common line. sign = the pivot's side.
+  const auto pivot = [](const Real (&side)[3], int& index, int& sign) {
+    int positive = 0;
+    int negative = 0;
+    for (int i = 0; i < 3; ++i) {
+      positive += side[i] > 0;
+      negative += side[i] < 0;
+    }
+    for (int i = 0; i < 3; ++i) {
+      if ((positive == 1 && side[i] > 0) || (positive != 1 && negative == 1 && side[i] < 0) ||
+          (positive != 1 && negative != 1 && side[i] == 0)) {
+        index = i;
+        // A zero pivot (the other two strictly on one side) counts as being on the opposite side.
+        sign = side[i] > 0 ? 1 : (side[i] < 0 ? -1 : (positive == 2 ? -1 : 1));
+        return;
+      }
+    }
+  };
+  int ia = 0, sign_a = 1, ib = 0, sign_b = 1;
+  pivot(side_a, ia, sign_a);
+  pivot(side_b, ib, sign_b);
+  // Rotate each triangle to start at its pivot (keeps its orientation), then flip the other
+  // triangle's orientation where needed so that each pivot is on the positive side of the other
+  // triangle's plane.
+  Vec3 p[3] = {a[ia], a[(ia + 1) % 3], a[(ia + 2) % 3]};
+  Vec3 q[3] = {b[ib], b[(ib + 1) % 3], b[(ib + 2) % 3]};
+  if (sign_a < 0) std::swap(q[1], q[2]);
+  if (sign_b < 0) std::swap(p[1], p[2]);
+  // The intervals [p-edge (p0,p2), p-edge (p0,p1)] and [q-edge (q0,q1), q-edge (q0,q2)] are
+  // ordered consistently along the common line; they overlap iff each starts before the other
+  // ends, and each of those comparisons is one orientation sign (G&D, Sec. 3).
+  return orient3d(p[0], p[1], q[0], q[1]) <= 0 && orient3d(p[0], p[2], q[2], q[0]) <= 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Triangle / volumes and shapes
+
+bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box) {
+  // Akenine-Moller, "Fast 3D Triangle-Box Overlap Testing", JGT 6(1), 2001. A zero axis (a
+  // degenerate triangle's normal, an edge parallel to a box axis or of zero length) projects
+  // everything to 0 with radius 0 and so never separates: no special case is needed, and for a
+  // degenerate triangle the remaining axes (box faces, edge x box axes) are exactly the
+  // separating axes of a segment against a box (Ericson 5.3.3).
+  // Box face normals first, on the untranslated coordinates (no rounding at all).
+  for (int k = 0; k < 3; ++k) {
+    if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;
+    if (!(box.min[k] <= box.max[k])) return false;  // empty or NaN box
+  }
+  const Vec3 center = box.center();
+  const Vec3 h = (box.max - box.min) * Real(0.5);
+  const Vec3 v[3] = {a - center, b - center, c - center};
+  const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  // Nine axes edge x box axis k: components (k+1, k+2) are (e[k+2], -e[k+1]).
+  for (int m = 0; m < 3; ++m) {
+    for (int k = 0; k < 3; ++k) {
+      const int i = (k + 1) % 3;
+      const int j = (k + 2) % 3;
+      const Real p0 = e[m][j] * v[0][i] - e[m][i] * v[0][j];
+      const Real p1 = e[m][j] * v[1][i] - e[m][i] * v[1][j];
+      const Real p2 = e[m][j] * v[2][i] - e[m][i] * v[2][j];
+      const Real radius = h[i] * std::abs(e[m][j]) + h[j] * std::abs(e[m][i]);
+      if (std::min({p0, p1, p2}) > radius || std::max({p0, p1, p2}) < -radius) return false;
+    }
+  }
+  // Triangle normal: plane/box test.
+  const Vec3 n = e[0].cross(e[1]);
+  return std::abs(n.dot(v[0])) <= h.dot(n.cwiseAbs());
+}
+
+bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box) {
+  // In the box frame the box is axis-aligned; rotations keep the test's answer.
+  const Mat3 box_from_world = box.axes.transpose();
+  const Aabb local{-box.half_extents, box.half_extents};
+  return triangle_overlaps_aabb(box_from_world * (a - box.center), box_from_world * (b - box.center),
+                                box_from_world * (c - box.center), local);
+}
+
+bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& sphere) {
+  return (closest_point_on_triangle(sphere.center, a, b, c) - sphere.center).squaredNorm() <=
+         sphere.radius * sphere.radius;
+}
+
+bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
+  return segment_triangle_distance_squared(capsule.p0, capsule.p1, a, b, c) <= capsule.radius * capsule.radius;
+}
+
+bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane) {
+  const Real da = plane.signed_distance_scaled(a);
+  const Real db = plane.signed_distance_scaled(b);
+  const Real dc = plane.signed_distance_scaled(c);
+  return std::min({da, db, dc}) <= 0 && std::max({da, db, dc}) >= 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distances
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Ericson, Real-Time Collision Detection, 5.1.5: vertex regions by dot products, then edge
+  // regions and the interior by barycentric numerators. The numerators are taken in the book's
+  // first, cross-product form n . ((a - p) x (b - p)) rather than its Lagrange-identity rewrite:
+  // the rewrite cancels catastrophically on thin triangles, the cross-product form stays accurate
+  // relative to the triangle's own size.
+  const Vec3 ab = b - a;
+  const Vec3 ac = c - a;
+  const Vec3 bc = c - b;
+  const Vec3 n = ab.cross(ac);
+  if (is_zero(n)) {
+    // Degenerate: the triangle is the union of its edges.
+    const Vec3 q0 = closest_point_on_segment(p, a, b);
+    const Vec3 q1 = closest_point_on_segment(p, b, c);
+    const Vec3 q2 = closest_point_on_segment(p, c, a);
+    const Real d0 = (q0 - p).squaredNorm();
+    const Real d1 = (q1 - p).squaredNorm();
+    const Real d2 = (q2 - p).squaredNorm();
+    return d0 <= d1 && d0 <= d2 ? q0 : (d1 <= d2 ? q1 : q2);
+  }
+  // Parametric positions of p along the edges, from each end.
+  const Real snom = (p - a).dot(ab);
+  const Real sdenom = (p - b).dot(a - b);
+  const Real tnom = (p - a).dot(ac);
+  const Real tdenom = (p - c).dot(a - c);
+  if (snom <= 0 && tnom <= 0) return a;
+  const Real unom = (p - b).dot(bc);
+  const Real udenom = (p - c).dot(b - c);
+  if (sdenom <= 0 && unom <= 0) return b;
+  if (tdenom <= 0 && udenom <= 0) return c;
+
+  const Vec3 pa = a - p;
+  const Vec3 pb = b - p;
+  const Vec3 pc = c - p;
+  const Real vc = n.dot(pa.cross(pb));
+  if (vc <= 0 && snom >= 0 && sdenom >= 0) {
+    const Real sum = snom + sdenom;  // |ab|^2
+    return sum > 0 ? Vec3(a + (snom / sum) * ab) : a;
+  }
+  const Real va = n.dot(pb.cross(pc));
+  if (va <= 0 && unom >= 0 && udenom >= 0) {
+    const Real sum = unom + udenom;
+    return sum > 0 ? Vec3(b + (unom / sum) * bc) : b;
+  }
+  const Real vb = n.dot(pc.cross(pa));
+  if (vb <= 0 && tnom >= 0 && tdenom >= 0) {
+    const Real sum = tnom + tdenom;
+    return sum > 0 ? Vec3(a + (tnom / sum) * ac) : a;
+  }
+  const Real sum = va + vb + vc;
+  if (!(va >= 0 && vb >= 0 && vc >= 0 && sum > 0)) {
+    // The regions cover space exactly only in exact arithmetic; on a rounding miss (a sliver
+    // triangle) fall back to the boundary, which is within the sliver's width of the answer.
+    const Vec3 q0 = closest_point_on_segment(p, a, b);
+    const Vec3 q1 = closest_point_on_segment(p, b, c);
+    const Vec3 q2 = closest_point_on_segment(p, c, a);
+    const Real d0 = (q0 - p).squaredNorm();
+    const Real d1 = (q1 - p).squaredNorm();
+    const Real d2 = (q2 - p).squaredNorm();
+    return d0 <= d1 && d0 <= d2 ? q0 : (d1 <= d2 ? q1 : q2);
+  }
+  return (va / sum) * a + (vb / sum) * b + (vc / sum) * c;
+}
+
+Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  // Ericson 5.1.9 (ClosestPtSegmentSegment), with exact zero tests for zero-length segments and
+  // the unclamped s taken from the cross product d1 x d2 instead of a*e - b*b: both are
+  // |d1 x d2|^2, but the latter cancels catastrophically for nearly parallel segments.
+  const Vec3 d1 = p1 - p0;
+  const Vec3 d2 = q1 - q0;
+  const Vec3 r = p0 - q0;
+  const Real a = d1.squaredNorm();
+  const Real e = d2.squaredNorm();
+  const Real f = d2.dot(r);
+  Real s = 0;
+  Real t = 0;
+  if (a == 0 && e == 0) return r.squaredNorm();
+  if (a == 0) {
+    t = std::clamp(f / e, Real(0), Real(1));
+  } else {
+    const Real c = d1.dot(r);
+    if (e == 0) {
+      s = std::clamp(-c / a, Real(0), Real(1));
+    } else {
+      const Real b = d1.dot(d2);
+      const Vec3 n = d1.cross(d2);
+      const Real denom = n.squaredNorm();
+      // Parallel segments: any s works as a start, the clamping below finds the closest pair.
+      s = denom > 0 ? std::clamp((-r).cross(d2).dot(n) / denom, Real(0), Real(1)) : Real(0);
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / a, Real(0), Real(1));
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((b - c) / a, Real(0), Real(1));
+      }
+    }
+  }
+  return ((p0 + s * d1) - (q0 + t * d2)).squaredNorm();
+}
+
+Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Zero if the segment meets the triangle. Otherwise the closest pair has a segment end on one
+  // side or a triangle edge on the other (the interior of each cannot both be closest), so the
+  // distance is the least of two point/triangle and three segment/segment distances. A degenerate
+  // triangle is the union of its edges, which the same minimum covers.
+  const Vec3 n = (b - a).cross(c - a);
+  if (!is_zero(n) && segment_meets_triangle(p0, p1, a, b, c, n)) return 0;
+  Real best = (closest_point_on_triangle(p0, a, b, c) - p0).squaredNorm();
+  best = std::min(best, (closest_point_on_triangle(p1, a, b, c) - p1).squaredNorm());
+  best = std::min(best, segment_segment_distance_squared(p0, p1, a, b));
+  best = std::min(best, segment_segment_distance_squared(p0, p1, b, c));
+  best = std::min(best, segment_segment_distance_squared(p0, p1, c, a));
+  return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Out-of-line box tests of volume/aabb.h
+
+bool overlaps(const Aabb& box, const Obb& obb) {
+  if (box.is_empty()) return false;
+  return boxes_overlap((box.max - box.min) * Real(0.5), obb.center - box.center(), obb.axes, obb.half_extents);
+}
+
+bool overlaps(const Aabb& a, const Aabb& b, const RigidTransform& a_from_b) {
+  if (a.is_empty() || b.is_empty()) return false;
+  const Vec3 b_center = a_from_b.apply(b.center());
+  return boxes_overlap((a.max - a.min) * Real(0.5), b_center - a.center(), a_from_b.rotation,
+                       (b.max - b.min) * Real(0.5));
+}
+
+bool overlaps(const Aabb& box, const Capsule& capsule) {
+  if (box.is_empty()) return false;
+  // Never miss a true contact: pad the radius by a few hundred ulps of the coordinates involved,
+  // which covers the rounding of the distance computation (conservative, not exact).
+  const Real scale = box.min.cwiseAbs().maxCoeff() + box.max.cwiseAbs().maxCoeff() +
+                     capsule.p0.cwiseAbs().maxCoeff() + capsule.p1.cwiseAbs().maxCoeff() + capsule.radius;
+  const Real r = capsule.radius + kContactSlack * scale;
+  // Quick reject on the capsule's bounding box.
+  const Vec3 lo = capsule.p0.cwiseMin(capsule.p1).array() - r;
+  const Vec3 hi = capsule.p0.cwiseMax(capsule.p1).array() + r;
+  if ((lo.array() > box.max.array()).any() || (hi.array() < box.min.array()).any()) return false;
+  return segment_box_squared_distance(capsule.p0, capsule.p1, box) <= r * r;
+}
+
+bool overlaps(const Aabb& box, const Plane& plane) {
+  if (box.is_empty()) return false;
+  // The plane function is linear, so its extremes over the box are at the corners picked per axis
+  // by the sign of the normal (Ericson 5.2.3, written without the center so integer boxes are exact).
+  Real lo = 0;
+  Real hi = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Real n = plane.normal[k];
+    lo += n * (n >= 0 ? box.min[k] : box.max[k]);
+    hi += n * (n >= 0 ? box.max[k] : box.min[k]);
+  }
+  return lo <= plane.offset && plane.offset <= hi;
+}
+
+}  // namespace boxtree

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>  // cross()
+
 #include "boxtree/error.h"
 
 namespace boxtree {

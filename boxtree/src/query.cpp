@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/volume.h"
 
 namespace boxtree {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/volume.h"
 
 namespace boxtree {
 namespace {
@@ -46,6 +46,7 @@ TreeStats compute_tree_stats(const Tree<Volume>& tree) {
   const std::vector<int> level = node_levels(tree);
   s.levels.resize(std::size_t(tree.height()) + 1);
   Real area_sum = 0;
+  Real width_sum = 0;
   for (NodeIndex node = 0; node < tree.node_count(); ++node) {
     LevelStats& l = s.levels[std::size_t(level[node])];
     const Real area = surface_area(tree.volume(node));
@@ -53,6 +54,7 @@ TreeStats compute_tree_stats(const Tree<Volume>& tree) {
     l.avg_area += area;
     l.avg_volume += volume(tree.volume(node));
     area_sum += area;
+    width_sum += mean_width(tree.volume(node));
   }
   for (std::size_t i = 0; i < s.levels.size(); ++i) {
     LevelStats& l = s.levels[i];
@@ -66,6 +68,8 @@ TreeStats compute_tree_stats(const Tree<Volume>& tree) {
   // A flat root (a planar mesh) has no interior for planes to cut "at random"; fall back to
   // counting nodes, the limit of the ratio as the thickness goes to zero uniformly.
   s.plane_cost = root_area > 0 ? area_sum / root_area : Real(s.nodes);
+  const Real root_width = mean_width(tree.volume(tree.root()));
+  s.plane_cost_mean_width = root_width > 0 ? width_sum / root_width : Real(s.nodes);
   return s;
 }
 

@@ -98,7 +98,8 @@ int run_info(const Options& o, const std::string& path) {
                   {"build_seconds", build.seconds},
                   {"build_rounds", build.rounds},
                   {"levels", levels},
-                  {"plane_cost", s.plane_cost}});
+                  {"plane_cost", s.plane_cost},
+                  {"plane_cost_mean_width", s.plane_cost_mean_width}});
     } else {
       std::printf("mesh         %s\n", path.c_str());
       std::printf("method       %s\n", o.method.c_str());
@@ -107,7 +108,9 @@ int run_info(const Options& o, const std::string& path) {
       std::printf("tree         %zu nodes, height %d, %zu bytes (%.1f B/facet), built in %.3f s (%d rounds)\n",
                   s.nodes, s.height, s.memory_bytes, double(s.memory_bytes) / double(s.facets), build.seconds,
                   build.rounds);
-      std::printf("plane cost   %.3f nodes expected per random plane (sum S_v / S_root)\n", s.plane_cost);
+      std::printf("plane cost   %.3f = sum S_v / S_root (paper; = expected volumes cut per random line)\n", s.plane_cost);
+      std::printf("             %.3f = sum W_v / W_root (expected volumes cut per random plane, W = mean width)\n",
+                  s.plane_cost_mean_width);
       std::printf("level  nodes      avg_area        avg_volume\n");
       for (const LevelStats& l : s.levels)
         std::printf("%5d  %-9zu  %-14.6g  %-14.6g\n", l.level, l.nodes, l.avg_area, l.avg_volume);

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/volume.h"
 
 namespace boxtree {
 

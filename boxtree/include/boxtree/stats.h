@@ -23,9 +23,13 @@ struct TreeStats {
   std::size_t memory_bytes = 0;  // the hierarchy (volumes + links), not the mesh
   std::size_t mesh_bytes = 0;    // the mesh's vertex and index arrays
   std::vector<LevelStats> levels;
-  // Expected number of nodes a random plane cuts, sum_v S_v / S_root (paper Section 4, by
-  // Cauchy's formula for planes uniform among those cutting the root volume).
+  // The paper's expected random-plane cost, sum_v S_v / S_root (Section 4). Note: by
+  // Cauchy-Crofton this ratio is exactly the expected number of volumes cut by a random *line*
+  // that cuts the root (tests/test_stats.cpp checks it by sampling). For random *planes* the
+  // measure of planes meeting a convex body is proportional to its mean width, not its area:
+  // that expectation is plane_cost_mean_width.
   Real plane_cost = 0;
+  Real plane_cost_mean_width = 0;  // sum_v W_v / W_root, W = mean width
 };
 
 template <class Volume>

@@ -39,6 +39,11 @@ inline Real volume(const Aabb& box) {
   const Vec3 e = box.extent();
   return e.x() * e.y() * e.z();
 }
+// Mean width (the mean over directions of the box's extent along them): (a + b + c) / 2 for
+// edge lengths a, b, c. By Crofton's formula the chance that a random plane meets a convex body
+// is proportional to its mean width, as the chance that a random line meets it is proportional
+// to its surface area.
+inline Real mean_width(const Aabb& box) { return box.extent().sum() / 2; }
 inline Vec3 center(const Aabb& box) { return box.center(); }
 inline Aabb bounding_aabb(const Aabb& box) { return box; }
 

@@ -1,0 +1,15 @@
+#include <boxtree/build.h>
+#include <boxtree/generate.h>
+#include <boxtree/query.h>
+
+#include <cstdio>
+
+int main() {
+  const boxtree::Tree<boxtree::Aabb> tree = boxtree::build_tree<boxtree::Aabb>(boxtree::make_uv_sphere(16, 8));
+  boxtree::Ray ray;
+  ray.origin = boxtree::Vec3(0, 0, 5);
+  ray.direction = boxtree::Vec3(0, 0, -1);
+  const auto hit = boxtree::ray_closest_hit(tree, ray);
+  std::printf("consumer: %zu facets, hit t = %g\n", tree.facet_count(), hit ? hit->t : -1.0);
+  return hit && hit->t > 3.9 && hit->t < 4.0 + 1e-12 ? 0 : 1;
+}
