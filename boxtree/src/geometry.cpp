@@ -18,6 +18,8 @@
 #include <limits>
 #include <utility>
 
+#include <Eigen/Geometry>  // cross products
+
 namespace boxtree {
 namespace {
 
@@ -192,7 +194,9 @@ Real segment_box_squared_distance(const Vec3& p0, const Vec3& p1, const Aabb& bo
     }
   }
   breaks[count++] = 1;
-  std::sort(breaks, breaks + count);
+  for (int i = 1; i < count; ++i) {  // insertion sort of at most 8 values
+    for (int j = i; j > 0 && breaks[j] < breaks[j - 1]; --j) std::swap(breaks[j], breaks[j - 1]);
+  }
   Real best = std::numeric_limits<Real>::infinity();
   for (int piece = 0; piece + 1 < count; ++piece) {
     const Real t0 = breaks[piece];
@@ -219,25 +223,26 @@ Real segment_box_squared_distance(const Vec3& p0, const Vec3& p1, const Aabb& bo
 // Separating-axis test of an axis-aligned box (half extents ha, at the origin) against a box with
 // center t, axes r.col(j) and half extents hb, all in the first box's frame (Gottschalk, Lin,
 // Manocha, "OBBTree", SIGGRAPH 1996, Sec. 4; Ericson 4.4.1). 15 axes: 3 + 3 face normals and the
-// 9 edge cross products. Exact for exactly represented inputs apart from the epsilon below, which
-// only ever turns "separated" into "overlapping".
+// 9 edge cross products; enough for flat boxes too (a rectangle's or a segment's candidate axes
+// are among them).
 bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb) {
   // Gottschalk's epsilon on |R|: when two edges are (nearly) parallel their cross product is
-  // (nearly) zero and rounding noise in R alone could decide the test; padding the radii keeps it
-  // conservative. Axes whose cross product is zero to working precision are skipped outright:
-  // they carry no separating information, and for boxes that are flat in two axes the padded
-  // radius would still be zero.
+  // (nearly) zero and rounding noise in R alone could decide the test. Padding the radii by
+  // kEps * (box sizes), plus kEps * |t| for the rounding of the projected center distance, keeps
+  // the test conservative: it may report boxes that are apart by ~1e-12 of their sizes and
+  // distance as overlapping, never the reverse. The |t| term is what covers boxes that are flat
+  // in two axes (segments), whose padded radii can be zero.
   constexpr Real kEps = 1e-12;
-  constexpr Real kParallelSquared = 1e-24;
+  const Real slack = kEps * t.cwiseAbs().sum();
   Mat3 abs_r;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) abs_r(i, j) = std::abs(r(i, j)) + kEps;
   }
   for (int i = 0; i < 3; ++i) {
-    if (std::abs(t[i]) > ha[i] + hb.dot(abs_r.row(i))) return false;
+    if (std::abs(t[i]) > ha[i] + hb.dot(abs_r.row(i)) + slack) return false;
   }
   for (int j = 0; j < 3; ++j) {
-    if (std::abs(t.dot(r.col(j))) > ha.dot(abs_r.col(j)) + hb[j]) return false;
+    if (std::abs(t.dot(r.col(j))) > ha.dot(abs_r.col(j)) + hb[j] + slack) return false;
   }
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3;
@@ -245,12 +250,12 @@ bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb)
     for (int j = 0; j < 3; ++j) {
       const int j1 = (j + 1) % 3;
       const int j2 = (j + 2) % 3;
-      // L = A_i x B_j has components L[i1] = -r(i2, j), L[i2] = r(i1, j) in A's frame.
-      if (r(i1, j) * r(i1, j) + r(i2, j) * r(i2, j) <= kParallelSquared) continue;
+      // L = A_i x B_j has components L[i1] = -r(i2, j), L[i2] = r(i1, j) in A's frame; B_m . L
+      // is +-r(i, third index) because B's axes are orthonormal.
       const Real distance = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
       const Real ra = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
       const Real rb = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
-      if (distance > ra + rb) return false;
+      if (distance > ra + rb + slack) return false;
     }
   }
   return true;
@@ -451,9 +456,15 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
       if (std::min({p0, p1, p2}) > radius || std::max({p0, p1, p2}) < -radius) return false;
     }
   }
-  // Triangle normal: plane/box test.
+  // Triangle normal. The paper projects one corner only, assuming n is perpendicular to the
+  // triangle; for a nearly degenerate triangle the computed n is mostly rounding noise and is not,
+  // so all three corners are projected: then n is a valid separating axis whatever its accuracy.
   const Vec3 n = e[0].cross(e[1]);
-  return std::abs(n.dot(v[0])) <= h.dot(n.cwiseAbs());
+  const Real d0 = n.dot(v[0]);
+  const Real d1 = n.dot(v[1]);
+  const Real d2 = n.dot(v[2]);
+  const Real radius = h.dot(n.cwiseAbs());
+  return !(std::min({d0, d1, d2}) > radius || std::max({d0, d1, d2}) < -radius);
 }
 
 bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box) {
@@ -486,15 +497,15 @@ bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const P
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   // Ericson, Real-Time Collision Detection, 5.1.5: vertex regions by dot products, then edge
   // regions and the interior by barycentric numerators. The numerators are taken in the book's
-  // first, cross-product form n . ((a - p) x (b - p)) rather than its Lagrange-identity rewrite:
-  // the rewrite cancels catastrophically on thin triangles, the cross-product form stays accurate
-  // relative to the triangle's own size.
+  // first, cross-product form n . ((a - p) x (b - p)) rather than its Lagrange-identity rewrite,
+  // which cancels catastrophically on thin triangles; and the interior point is the projection of
+  // p on the plane rather than the barycentric combination, whose position along a needle
+  // triangle is only known to ~eps * L^2 / width.
   const Vec3 ab = b - a;
   const Vec3 ac = c - a;
   const Vec3 bc = c - b;
   const Vec3 n = ab.cross(ac);
-  if (is_zero(n)) {
-    // Degenerate: the triangle is the union of its edges.
+  const auto closest_on_edges = [&] {
     const Vec3 q0 = closest_point_on_segment(p, a, b);
     const Vec3 q1 = closest_point_on_segment(p, b, c);
     const Vec3 q2 = closest_point_on_segment(p, c, a);
@@ -502,7 +513,14 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
     const Real d1 = (q1 - p).squaredNorm();
     const Real d2 = (q2 - p).squaredNorm();
     return d0 <= d1 && d0 <= d2 ? q0 : (d1 <= d2 ? q1 : q2);
-  }
+  };
+  // Degenerate (zero normal) or a needle narrower than 1e-8 of its longest edge L (|n| = L *
+  // width): the triangle is its edges to within that width, which is also about the accuracy the
+  // region tests below would have (eps * L / width), so take the edges.
+  const Real longest_squared = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
+  const Real normal_squared = n.squaredNorm();
+  if (!(normal_squared > Real(1e-16) * longest_squared * longest_squared)) return closest_on_edges();
+
   // Parametric positions of p along the edges, from each end.
   const Real snom = (p - a).dot(ab);
   const Real sdenom = (p - b).dot(a - b);
@@ -518,33 +536,15 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   const Vec3 pb = b - p;
   const Vec3 pc = c - p;
   const Real vc = n.dot(pa.cross(pb));
-  if (vc <= 0 && snom >= 0 && sdenom >= 0) {
-    const Real sum = snom + sdenom;  // |ab|^2
-    return sum > 0 ? Vec3(a + (snom / sum) * ab) : a;
-  }
+  if (vc <= 0 && snom >= 0 && sdenom >= 0) return a + (snom / (snom + sdenom)) * ab;
   const Real va = n.dot(pb.cross(pc));
-  if (va <= 0 && unom >= 0 && udenom >= 0) {
-    const Real sum = unom + udenom;
-    return sum > 0 ? Vec3(b + (unom / sum) * bc) : b;
-  }
+  if (va <= 0 && unom >= 0 && udenom >= 0) return b + (unom / (unom + udenom)) * bc;
   const Real vb = n.dot(pc.cross(pa));
-  if (vb <= 0 && tnom >= 0 && tdenom >= 0) {
-    const Real sum = tnom + tdenom;
-    return sum > 0 ? Vec3(a + (tnom / sum) * ac) : a;
-  }
-  const Real sum = va + vb + vc;
-  if (!(va >= 0 && vb >= 0 && vc >= 0 && sum > 0)) {
-    // The regions cover space exactly only in exact arithmetic; on a rounding miss (a sliver
-    // triangle) fall back to the boundary, which is within the sliver's width of the answer.
-    const Vec3 q0 = closest_point_on_segment(p, a, b);
-    const Vec3 q1 = closest_point_on_segment(p, b, c);
-    const Vec3 q2 = closest_point_on_segment(p, c, a);
-    const Real d0 = (q0 - p).squaredNorm();
-    const Real d1 = (q1 - p).squaredNorm();
-    const Real d2 = (q2 - p).squaredNorm();
-    return d0 <= d1 && d0 <= d2 ? q0 : (d1 <= d2 ? q1 : q2);
-  }
-  return (va / sum) * a + (vb / sum) * b + (vc / sum) * c;
+  if (vb <= 0 && tnom >= 0 && tdenom >= 0) return a + (tnom / (tnom + tdenom)) * ac;
+  // The regions cover space exactly only in exact arithmetic; a rounding miss happens within
+  // ~eps * L of the boundary, where the boundary is the answer.
+  if (!(va >= 0 && vb >= 0 && vc >= 0)) return closest_on_edges();
+  return p + (n.dot(pa) / normal_squared) * n;
 }
 
 Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
@@ -591,7 +591,12 @@ Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec
   // distance is the least of two point/triangle and three segment/segment distances. A degenerate
   // triangle is the union of its edges, which the same minimum covers.
   const Vec3 n = (b - a).cross(c - a);
-  if (!is_zero(n) && segment_meets_triangle(p0, p1, a, b, c, n)) return 0;
+  if (is_zero(n)) {
+    const auto [s, e] = degenerate_extent(a, b, c);
+    if (segments_meet(p0, p1, s, e)) return 0;  // exact zero on touching, as for proper triangles
+  } else if (segment_meets_triangle(p0, p1, a, b, c, n)) {
+    return 0;
+  }
   Real best = (closest_point_on_triangle(p0, a, b, c) - p0).squaredNorm();
   best = std::min(best, (closest_point_on_triangle(p1, a, b, c) - p1).squaredNorm());
   best = std::min(best, segment_segment_distance_squared(p0, p1, a, b));

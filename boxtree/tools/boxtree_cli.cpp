@@ -309,6 +309,19 @@ int main(int argc, char** argv) {
   generate->add_option("--size", size, "Size parameter (see KIND)")->capture_default_str()->check(CLI::Range(1, 1 << 24));
   generate->add_option("--seed", seed, "Random seed")->capture_default_str();
 
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string name = argv[1];
+    bool known = false;
+    std::string valid;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->get_name() == name;
+      valid += (valid.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "boxtree: error: unknown subcommand '" << name << "' (valid subcommands: " << valid << ")\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

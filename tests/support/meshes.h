@@ -43,14 +43,46 @@ inline double test_scale() {
   return s ? std::max(0.01, std::atof(s)) : 1.0;
 }
 
-// A cone over a regular polygon: every facet shares the apex (paper, Section 5).
+// A closed cone over a regular polygon: every mantle facet shares the apex (paper, Section 5),
+// and the base is a fan around its centre.
 inline TriangleMesh make_cone(int sides) {
   TriangleMesh mesh;
   const double pi = std::acos(-1.0);
   mesh.vertices.push_back(Vec3(0, 0, 1));
   for (int i = 0; i < sides; ++i) mesh.vertices.push_back(Vec3(std::cos(2 * pi * i / sides), std::sin(2 * pi * i / sides), 0));
-  for (int i = 0; i < sides; ++i)
+  mesh.vertices.push_back(Vec3(0, 0, 0));
+  const VertexId base = VertexId(sides + 1);
+  for (int i = 0; i < sides; ++i) {
     mesh.triangles.push_back({0, VertexId(1 + i), VertexId(1 + (i + 1) % sides)});
+    mesh.triangles.push_back({base, VertexId(1 + (i + 1) % sides), VertexId(1 + i)});
+  }
+  return mesh;
+}
+
+// A terrain closed into a solid: the height field on top, a flat bottom at z = -1 and four
+// walls, all sharing the rim vertices (a closed mesh with sharp creases and flat regions).
+inline TriangleMesh make_closed_terrain(int cells, std::uint64_t seed) {
+  TriangleMesh mesh = make_terrain(cells, cells, seed, 10, 2);
+  const int n = cells + 1;
+  auto top = [&](int i, int j) { return VertexId(j * n + i); };
+  // Rim of the top grid, counter-clockwise seen from above.
+  std::vector<VertexId> rim;
+  for (int i = 0; i < cells; ++i) rim.push_back(top(i, 0));
+  for (int j = 0; j < cells; ++j) rim.push_back(top(cells, j));
+  for (int i = cells; i > 0; --i) rim.push_back(top(i, cells));
+  for (int j = cells; j > 0; --j) rim.push_back(top(0, j));
+  const VertexId bottom_first = VertexId(mesh.vertices.size());
+  for (VertexId v : rim) mesh.vertices.push_back(Vec3(mesh.vertices[v].x(), mesh.vertices[v].y(), -1));
+  const VertexId centre = VertexId(mesh.vertices.size());
+  mesh.vertices.push_back(Vec3(5, 5, -1));
+  const std::size_t m = rim.size();
+  for (std::size_t k = 0; k < m; ++k) {
+    const VertexId a = rim[k], b = rim[(k + 1) % m];
+    const VertexId a_low = VertexId(bottom_first + k), b_low = VertexId(bottom_first + (k + 1) % m);
+    mesh.triangles.push_back({a, a_low, b_low});
+    mesh.triangles.push_back({a, b_low, b});
+    mesh.triangles.push_back({centre, b_low, a_low});
+  }
   return mesh;
 }
 
