@@ -221,6 +221,22 @@ TEST(QueryOverlap, MatchesBruteForceOnRealMeshes) {
     check_overlaps(build_tree<Aabb>(test::load_shared_mesh(name)), 25, name);
 }
 
+// Bad query shapes (NaN, inverted or empty boxes, negative radii) report nothing and never crash.
+TEST(QueryOverlap, BadShapesReportNothing) {
+  const Tree<Aabb> tree = build_tree<Aabb>(make_terrain(8, 8, 1));
+  const double nan = std::nan("");
+  EXPECT_TRUE(query_overlap(tree, Sphere{Vec3(nan, 0, 0), 1}).empty());
+  EXPECT_TRUE(query_overlap(tree, Sphere{Vec3(50, 50, 5), -1}).empty());
+  EXPECT_TRUE(query_overlap(tree, Sphere{Vec3(50, 50, 5), nan}).empty());
+  EXPECT_TRUE(query_overlap(tree, Aabb::empty()).empty());
+  EXPECT_TRUE(query_overlap(tree, Aabb{Vec3(nan, 0, 0), Vec3(100, 100, 100)}).empty());
+  EXPECT_TRUE(query_overlap(tree, Capsule{Vec3(0, 0, nan), Vec3(1, 1, 1), 1}).empty());
+  Obb obb{Vec3(50, 50, 5), Mat3::Identity(), Vec3(nan, 1, 1)};
+  EXPECT_TRUE(query_overlap(tree, obb).empty());
+  EXPECT_TRUE(query_plane(tree, Plane{Vec3(nan, 0, 1), 0}).empty());
+  EXPECT_EQ(stabbing_count(tree, Vec3(nan, 1, 1)), 0u);
+}
+
 TEST(QueryOverlap, VisitorCanStopEarly) {
   const Tree<Aabb> tree = build_tree<Aabb>(make_terrain(16, 16, 4));
   int calls = 0;
