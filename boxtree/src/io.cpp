@@ -421,11 +421,248 @@ void check_stl_storage(const std::string& path, const std::string& data) {
   }
 }
 
+// ---- PLY structure check ------------------------------------------------------------------------
+//
+// Assimp 5.2's PLY reader trusts the file: a header without end_header or a truncated ASCII body
+// makes it loop forever, a corrupt binary body can make it read out of bounds, and a comment
+// line between an element's properties makes it drop the properties after it, silently. So
+// before Assimp reads a PLY file, its structure is walked here: header lines, then every element
+// instance (one line of the right number of values in ASCII; the right number of bytes, list
+// lengths included, in binary). Values themselves are left to Assimp.
+
+struct PlyProperty {
+  int count_size = 0;  // bytes of a list's length field; 0 for a scalar property
+  bool count_signed = false;
+  int value_size = 0;  // bytes of one value
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+// Sizes of the PLY types, under the names Assimp knows.
+bool ply_type(std::string_view name, int* size, bool* is_signed, bool* is_integer) {
+  struct Type {
+    const char* name;
+    int size;
+    bool is_signed, is_integer;
+  };
+  static const Type types[] = {{"char", 1, true, true},     {"int8", 1, true, true},      {"uchar", 1, false, true},
+                               {"uint8", 1, false, true},   {"short", 2, true, true},     {"int16", 2, true, true},
+                               {"ushort", 2, false, true},  {"uint16", 2, false, true},   {"int", 4, true, true},
+                               {"int32", 4, true, true},    {"uint", 4, false, true},     {"uint32", 4, false, true},
+                               {"float", 4, true, false},   {"float32", 4, true, false},  {"double", 8, true, false},
+                               {"float64", 8, true, false}, {"double64", 8, true, false}};
+  for (const Type& t : types) {
+    if (name == t.name) {
+      *size = t.size;
+      *is_signed = t.is_signed;
+      *is_integer = t.is_integer;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Checks a PLY file's structure (see above). Returns true when the file is ASCII and its last line
+// has no line end: Assimp's line reader needs one appended.
+bool check_ply_structure(const std::string& path, const std::string& data) {
+  const auto malformed = [&](std::size_t line, const std::string& what) {
+    fail(path, "malformed PLY file: line " + std::to_string(line) + ": " + what);
+  };
+
+  // Header: '\n'-terminated lines ("\r\n" allowed), ending with "end_header".
+  std::vector<PlyElement> elements;
+  bool binary = false, big_endian = false, properties_closed = true, crlf_header = false;
+  std::size_t at = 0, line = 0;
+  for (bool done = false; !done;) {
+    ++line;
+    const std::size_t end = data.find('\n', at);
+    if (end == std::string::npos) {
+      fail(path, "malformed PLY file: the header has no end_header line (truncated or not a PLY file)");
+    }
+    std::string_view text(data.data() + at, end - at);
+    crlf_header = !text.empty() && text.back() == '\r';
+    if (crlf_header) text.remove_suffix(1);
+    at = end + 1;
+    if (text.find_first_of(std::string_view("\r\0", 2)) != std::string_view::npos) {
+      malformed(line, "stray CR or NUL byte in the header");
+    }
+    const std::vector<std::string_view> fields = split_fields(text);
+    const std::string_view keyword = fields.empty() ? std::string_view() : fields[0];
+    if (line == 1) {
+      if (fields.size() != 1 || (keyword != "ply" && keyword != "PLY")) malformed(line, "the file must start with 'ply'");
+      continue;
+    }
+    if (line == 2) {
+      // Assimp looks for the format on the second line only.
+      if (fields.size() != 3 || keyword != "format") malformed(line, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+      if (fields[1] == "binary_little_endian") {
+        binary = true;
+      } else if (fields[1] == "binary_big_endian") {
+        binary = big_endian = true;
+      } else if (fields[1] != "ascii") {
+        malformed(line, "unknown format " + shown(fields[1]));
+      }
+      continue;
+    }
+    if (keyword == "element") {
+      if (fields.size() != 3) malformed(line, "expected 'element <name> <count>'");
+      PlyElement element;
+      element.name = std::string(fields[1]);
+      const auto result = std::from_chars(fields[2].data(), fields[2].data() + fields[2].size(), element.count);
+      // Assimp keeps counts in 32 bits.
+      if (result.ec != std::errc() || result.ptr != fields[2].data() + fields[2].size() ||
+          element.count > std::numeric_limits<std::uint32_t>::max()) {
+        malformed(line, "bad element count " + shown(fields[2]));
+      }
+      elements.push_back(std::move(element));
+      properties_closed = false;
+    } else if (keyword == "property") {
+      if (elements.empty()) malformed(line, "property before any element");
+      // Assimp stops reading an element's properties at the first other line and silently drops
+      // the rest, so such headers are refused rather than misread.
+      if (properties_closed) malformed(line, "property after a comment or blank line inside an element (not supported)");
+      PlyProperty property;
+      bool value_signed = false, value_integer = false, count_integer = false;
+      const bool is_list = fields.size() >= 2 && fields[1] == "list";
+      if (is_list) {
+        if (fields.size() != 5) malformed(line, "expected 'property list <count type> <value type> <name>'");
+        if (!ply_type(fields[2], &property.count_size, &property.count_signed, &count_integer) || !count_integer) {
+          malformed(line, "bad list count type " + shown(fields[2]));
+        }
+        if (!ply_type(fields[3], &property.value_size, &value_signed, &value_integer)) {
+          malformed(line, "unknown type " + shown(fields[3]));
+        }
+      } else {
+        if (fields.size() != 3) malformed(line, "expected 'property <type> <name>'");
+        if (!ply_type(fields[1], &property.value_size, &value_signed, &value_integer)) {
+          malformed(line, "unknown type " + shown(fields[1]));
+        }
+      }
+      elements.back().properties.push_back(property);
+    } else if (keyword == "end_header") {
+      if (fields.size() != 1) malformed(line, "extra text after end_header");
+      done = true;
+    } else if (keyword == "comment" || keyword == "obj_info" || fields.empty()) {
+      properties_closed = true;
+    } else {
+      malformed(line, "unknown header line " + shown(text));
+    }
+  }
+
+  if (binary) {
+    // Assimp drops a first data byte of 0x0a after a "\n" header, taking it for half of "\r\n".
+    if (!crlf_header && at < data.size() && data[at] == '\n') {
+      fail(path, "binary PLY data starting with byte 0x0a cannot be read correctly by Assimp 5.2");
+    }
+    const auto read_count = [&](std::size_t offset, const PlyProperty& p) -> std::int64_t {
+      std::uint64_t value = 0;
+      for (int i = 0; i < p.count_size; ++i) {
+        const std::uint64_t byte = static_cast<unsigned char>(data[offset + i]);
+        value |= byte << (8 * (big_endian ? p.count_size - 1 - i : i));
+      }
+      if (p.count_signed && (value >> (8 * p.count_size - 1)) != 0) return -1;
+      return static_cast<std::int64_t>(value);
+    };
+    std::uint64_t offset = at;
+    const std::uint64_t size = data.size();
+    for (const PlyElement& element : elements) {
+      bool has_list = false;
+      std::uint64_t fixed = 0;
+      for (const PlyProperty& p : element.properties) {
+        has_list = has_list || p.count_size > 0;
+        fixed += p.value_size;
+      }
+      if (!has_list) {
+        if (element.count * fixed > size - offset) {
+          fail(path, "truncated PLY file: element '" + element.name + "' needs " + std::to_string(element.count * fixed) +
+                         " bytes at offset " + std::to_string(offset) + " but the file has " + std::to_string(size) +
+                         " bytes");
+        }
+        offset += element.count * fixed;
+        continue;
+      }
+      for (std::uint64_t i = 0; i < element.count; ++i) {
+        for (const PlyProperty& p : element.properties) {
+          std::uint64_t need = p.value_size;
+          if (p.count_size > 0) {
+            if (p.count_size > size - offset) need = p.count_size;  // reported below
+            else {
+              const std::int64_t n = read_count(offset, p);
+              if (n < 0) {
+                fail(path, "malformed PLY file: element '" + element.name + "' " + std::to_string(i) +
+                               ": negative list length at offset " + std::to_string(offset));
+              }
+              need = p.count_size + static_cast<std::uint64_t>(n) * p.value_size;
+            }
+          }
+          if (need > size - offset) {
+            fail(path, "truncated PLY file: element '" + element.name + "' " + std::to_string(i) + " of " +
+                           std::to_string(element.count) + " ends past the end of the file (" + std::to_string(size) +
+                           " bytes)");
+          }
+          offset += need;
+        }
+      }
+    }
+    return false;
+  }
+
+  // ASCII: one instance per '\n'-terminated line, no blank lines in between (Assimp's line
+  // reader skips one blank line but not two), no lone CR or NUL (Assimp takes both for line ends).
+  if (data.find('\0', at) != std::string::npos) fail(path, "malformed PLY file: NUL byte in ASCII data");
+  for (const PlyElement& element : elements) {
+    for (std::uint64_t i = 0; i < element.count; ++i) {
+      ++line;
+      if (at >= data.size()) {
+        fail(path, "truncated PLY file: element '" + element.name + "' has " + std::to_string(element.count) +
+                       " entries but the data ends after " + std::to_string(i));
+      }
+      std::size_t end = data.find('\n', at);
+      if (end == std::string::npos) end = data.size();
+      std::string_view text(data.data() + at, end - at);
+      at = end + 1;
+      if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+      if (text.find('\r') != std::string_view::npos) malformed(line, "stray CR byte (CR-only line ends are not supported)");
+      const std::vector<std::string_view> fields = split_fields(text);
+      if (fields.empty()) malformed(line, "blank line inside the data");
+      std::size_t next = 0;
+      for (const PlyProperty& p : element.properties) {
+        std::uint64_t values = 1;
+        if (p.count_size > 0) {
+          if (next >= fields.size()) break;
+          const std::string_view count = fields[next++];
+          const auto result = std::from_chars(count.data(), count.data() + count.size(), values);
+          if (result.ec != std::errc() || result.ptr != count.data() + count.size()) {
+            malformed(line, "bad list length " + shown(count) + " in element '" + element.name + "' " + std::to_string(i));
+          }
+        }
+        if (values > fields.size() - next) {
+          next = fields.size() + 1;  // too few values
+          break;
+        }
+        next += static_cast<std::size_t>(values);
+      }
+      if (next != fields.size()) {
+        malformed(line, std::string(next > fields.size() ? "too few" : "too many") + " values for element '" +
+                            element.name + "' " + std::to_string(i));
+      }
+    }
+  }
+  return data.back() != '\n';
+}
+
 TriangleMesh load_with_assimp(const std::string& path, const std::string& data, const std::string& ext) {
   const std::string format = ext.substr(1);  // "stl", "ply" or "off"
   std::string upper = format;
   std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return char(c - 'a' + 'A'); });
   if (format == "stl") check_stl_storage(path, data);
+  std::string terminated;  // a copy, only when Assimp needs a final line end
+  if (format == "ply" && check_ply_structure(path, data)) terminated = data + '\n';
+  const std::string& bytes = terminated.empty() ? data : terminated;
 
   std::vector<std::string> problems;
   std::lock_guard<std::mutex> lock(assimp_mutex());
@@ -442,7 +679,7 @@ TriangleMesh load_with_assimp(const std::string& path, const std::string& data, 
 
   Assimp::Importer importer;
   // From memory: we have the bytes already, and the extension (not Assimp's guess) picks the reader.
-  const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, format.c_str());
+  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), 0, format.c_str());
   if (!scene) fail(path, "malformed " + upper + " file: " + one_line(importer.GetErrorString()));
   if (!problems.empty()) {
     std::string message = "malformed " + upper + " file: " + one_line(problems.front());
