@@ -57,7 +57,8 @@ void put_f32(std::string& out, float f) {
 
 std::vector<Corners> facet_corners(const TriangleMesh& mesh) {
   std::vector<Corners> out;
-  for (boxtree::FacetId f = 0; f < mesh.facet_count(); ++f) out.push_back({mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)});
+  for (boxtree::FacetId f = 0; f < mesh.facet_count(); ++f)
+    out.push_back({mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)});
   return out;
 }
 
@@ -67,8 +68,9 @@ void expect_facets(const TriangleMesh& mesh, const std::vector<Corners>& expecte
   ASSERT_EQ(actual.size(), expected.size());
   for (std::size_t f = 0; f < expected.size(); ++f) {
     for (int k = 0; k < 3; ++k) {
-      EXPECT_EQ(actual[f][k], expected[f][k]) << "facet " << f << " corner " << k << ": got (" << actual[f][k].transpose()
-                                              << "), expected (" << expected[f][k].transpose() << ")";
+      EXPECT_EQ(actual[f][k], expected[f][k])
+          << "facet " << f << " corner " << k << ": got (" << actual[f][k].transpose() << "), expected ("
+          << expected[f][k].transpose() << ")";
     }
   }
 }
@@ -134,16 +136,20 @@ TEST(MeshIoObj, FanOrderGroupsMaterialsAndRelativeIndices) {
   const TriangleMesh mesh = boxtree::load_mesh(path);
   const Vec3 p1 = v3(0, 0, 0), p2 = v3(1, 0, 0), p3 = v3(3, 3, 0), p4 = v3(0, 1, 0), p5 = v3(0.5, 1.5, 0.25),
              p6 = v3(2, 0, -1), p7 = v3(2, 1, 0.125);
-  expect_facets(mesh, {{p1, p2, p3}, {p1, p3, p4},                  // quad
-                       {p6, p7, p5}, {p6, p5, p4}, {p6, p4, p2},    // pentagon
-                       {p7, p6, p5},                                // -1 -2 -3
-                       {p3, p2, p1}});                              // back in group "first"
+  expect_facets(mesh, {{p1, p2, p3},
+                       {p1, p3, p4},  // quad
+                       {p6, p7, p5},
+                       {p6, p5, p4},
+                       {p6, p4, p2},    // pentagon
+                       {p7, p6, p5},    // -1 -2 -3
+                       {p3, p2, p1}});  // back in group "first"
   EXPECT_EQ(mesh.vertices.size(), 7u);
 }
 
 TEST(MeshIoObj, CrlfBareCountLineAndUppercaseExtension) {
   // Like FCL's env.obj: CRLF line ends and a first line "vertices faces" that is no OBJ record.
-  const std::string path = write_file("CRLF.OBJ", "4 2\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nv 1 1 1\r\nf 1 2 3\r\nf 2 4 3");
+  const std::string path =
+      write_file("CRLF.OBJ", "4 2\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nv 1 1 1\r\nf 1 2 3\r\nf 2 4 3");
   const TriangleMesh mesh = boxtree::load_mesh(path);
   expect_facets(mesh, {{v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}, {v3(1, 0, 0), v3(1, 1, 1), v3(0, 1, 0)}});
 }
@@ -218,6 +224,35 @@ TEST(MeshIoPly, BinaryLittleEndianFansPolygonsInOrder) {
   expect_facets(mesh, {{p[4], p[3], p[2]}, {p[4], p[2], p[1]}, {p[0], p[2], p[4]}});
 }
 
+TEST(MeshIoPly, BigEndianAndCrlfHeaders) {
+  std::string bytes =
+      "ply\r\nformat binary_big_endian 1.0\r\nelement vertex 4\r\nproperty float x\r\nproperty float y\r\n"
+      "property float z\r\nelement face 1\r\nproperty list uchar uint vertex_indices\r\nend_header\r\n";
+  const auto put_be32 = [&](std::uint32_t v) {
+    for (int i = 3; i >= 0; --i) bytes += static_cast<char>((v >> (8 * i)) & 0xff);
+  };
+  const std::vector<Vec3> points = {v3(0, 0, 0), v3(1, 0, 0), v3(1, 1, 0.5), v3(0, 1, -0.25)};
+  for (const Vec3& p : points) {
+    for (int i = 0; i < 3; ++i) {
+      const float f = static_cast<float>(p[i]);
+      std::uint32_t bits;
+      std::memcpy(&bits, &f, 4);
+      put_be32(bits);
+    }
+  }
+  bytes += static_cast<char>(4);
+  for (std::uint32_t i : {0u, 1u, 2u, 3u}) put_be32(i);
+  expect_facets(boxtree::load_mesh(write_file("big_endian.ply", bytes)),
+                {{points[0], points[1], points[2]}, {points[0], points[2], points[3]}});
+
+  const TriangleMesh ascii = boxtree::load_mesh(
+      write_file("crlf.ply",
+                 "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+                 "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n"
+                 "0 0 0\r\n1 0 0\r\n0 1 0\r\n3 2 1 0"));  // and no final line end
+  expect_facets(ascii, {{v3(0, 1, 0), v3(1, 0, 0), v3(0, 0, 0)}});
+}
+
 TEST(MeshIoOff, QuadIsFannedInOrder) {
   const std::string path = write_file("quad.off",
                                       "OFF\n5 3 0\n0 0 0\n2 0 0\n2 2 0\n0 2 0\n1 1 1.5\n"
@@ -231,9 +266,16 @@ TEST(MeshIoObj, SaveThenLoadIsBitExact) {
   std::mt19937_64 rng(12345);
   TriangleMesh mesh;
   // Random bit patterns cover every exponent (subnormals included), plus hand-picked edge values.
-  const double specials[] = {0.0, -0.0, 0.1, 1.0 / 3.0, std::numeric_limits<double>::denorm_min(),
-                             std::numeric_limits<double>::min(), std::numeric_limits<double>::max(),
-                             -std::numeric_limits<double>::max(), 123456789.123456789, -2.5e-300};
+  const double specials[] = {0.0,
+                             -0.0,
+                             0.1,
+                             1.0 / 3.0,
+                             std::numeric_limits<double>::denorm_min(),
+                             std::numeric_limits<double>::min(),
+                             std::numeric_limits<double>::max(),
+                             -std::numeric_limits<double>::max(),
+                             123456789.123456789,
+                             -2.5e-300};
   for (double s : specials) mesh.vertices.push_back(v3(s, -s, s * 0.5));
   while (mesh.vertices.size() < 500) {
     Vec3 p;
@@ -334,7 +376,8 @@ TEST(MeshIoError, ObjMalformedNumberAndFace) {
 TEST(MeshIoError, NanCoordinate) {
   expect_load_error(write_file("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"),
                     {"line 2", "vertex 1", "non-finite", "facet 0"});
-  std::string stl = binary_stl({{v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}, {v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}}, "nan");
+  std::string stl =
+      binary_stl({{v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}, {v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}}, "nan");
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::string bits;
   put_f32(bits, nan);
@@ -351,7 +394,8 @@ TEST(MeshIoError, InfCoordinate) {
 }
 
 TEST(MeshIoError, NonFiniteUnusedVertexIsAccepted) {
-  const TriangleMesh mesh = boxtree::load_mesh(write_file("unused_nan.obj", "v nan 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 2 3 4\n"));
+  const TriangleMesh mesh =
+      boxtree::load_mesh(write_file("unused_nan.obj", "v nan 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 2 3 4\n"));
   EXPECT_EQ(mesh.facet_count(), 1u);
   EXPECT_EQ(boxtree::compute_mesh_stats(mesh).unused_vertices, 1u);
 }
@@ -362,7 +406,8 @@ TEST(MeshIoError, VerticesButNoFaces) {
 }
 
 TEST(MeshIoError, UnknownExtension) {
-  expect_load_error(write_file("mesh.xyz", "v 0 0 0\n"), {"unknown mesh file extension", "'.xyz'", ".obj, .stl, .ply, .off"});
+  expect_load_error(write_file("mesh.xyz", "v 0 0 0\n"),
+                    {"unknown mesh file extension", "'.xyz'", ".obj, .stl, .ply, .off"});
   expect_load_error(write_file("no_extension", "v 0 0 0\n"), {"unknown mesh file extension", "(none)"});
 }
 
@@ -377,10 +422,59 @@ TEST(MeshIoError, AssimpIndexProblemsAreErrors) {
                     {"polygon 1", "facet 1", "vertex index 3", "out of range"});
 }
 
+const char* const kPlyHeader =
+    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+// Inputs on which Assimp 5.2's PLY reader hangs, reads out of bounds or silently drops data.
+TEST(MeshIoError, PlyStructureIsCheckedBeforeAssimp) {
+  // No end_header (Assimp loops forever).
+  expect_load_error(write_file("no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"),
+                    {"malformed PLY", "end_header"});
+  // Truncated ASCII data (Assimp loops forever).
+  expect_load_error(write_file("truncated_ascii.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n0 1"),
+                    {"line 12", "too few values", "'vertex' 2"});
+  expect_load_error(write_file("missing_face.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n0 1 0\n"),
+                    {"truncated PLY", "'face'"});
+  // A comment between properties (Assimp drops the properties after it).
+  expect_load_error(write_file("comment_in_element.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\ncomment here\n"
+                               "property float y\nproperty float z\nelement face 1\n"
+                               "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                    {"line 6", "property after a comment"});
+  // Truncated binary data, and a list length running past the end.
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int i = 0; i < 9; ++i) put_f32(bytes, static_cast<float>(i + 1));
+  std::string faces = bytes;
+  faces += static_cast<char>(3);
+  for (std::uint32_t i : {0u, 1u, 2u}) put_u32(faces, i);
+  EXPECT_EQ(boxtree::load_mesh(write_file("binary_ok.ply", faces)).facet_count(), 1u);
+  expect_load_error(write_file("truncated_binary.ply", faces.substr(0, faces.size() - 3)),
+                    {"truncated PLY", "'face' 0 of 1"});
+  faces[bytes.size()] = static_cast<char>(200);  // list length 200
+  expect_load_error(write_file("long_list.ply", faces), {"truncated PLY", "'face' 0 of 1"});
+  expect_load_error(write_file("truncated_vertices.ply", bytes.substr(0, bytes.size() - 5)),
+                    {"truncated PLY", "'vertex'"});
+}
+
+// Inputs on which Assimp 5.2's OFF reader allocates gigabytes or overflows its line buffer.
+TEST(MeshIoError, OffStructureIsCheckedBeforeAssimp) {
+  expect_load_error(write_file("huge_count.off", "OFF\n3 2000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                    {"truncated OFF", "2000000000 faces", "6 lines"});
+  expect_load_error(write_file("bad_count.off", "OFF\n3 99999999999999999999999 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                    {"malformed OFF", "bad header"});
+  expect_load_error(
+      write_file("long_line.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 " + std::string(5000, '0') + "\n"),
+      {"line 6", "longer than 4095"});
+}
+
 TEST(MeshIoError, AssimpStaysSilent) {
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
-  EXPECT_THROW(boxtree::load_mesh(write_file("silent.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")), boxtree::Error);
+  EXPECT_THROW(boxtree::load_mesh(write_file("silent.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")),
+               boxtree::Error);
   EXPECT_THROW(boxtree::load_mesh(write_file("silent.ply", "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n")),
                boxtree::Error);
   EXPECT_NO_THROW(boxtree::load_mesh(write_file("silent_ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")));
@@ -446,14 +540,22 @@ struct SharedMeshFacts {
 // The statistics table of /work/shared/meshes/README.md (the source of truth).
 const std::map<std::string, SharedMeshFacts>& shared_mesh_table() {
   static const std::map<std::string, SharedMeshFacts> table = {
-      {"stanford_bunny.obj", {69451, 35947, 0}},         {"stanford_bunny_res2.obj", {16301, 8171, 0}},
-      {"stanford_bunny_res3.obj", {3851, 1889, 0}},      {"stanford_bunny_res4.obj", {948, 453, 0}},
-      {"bunny_libigl_closed.obj", {6966, 3485, 0}},      {"ode_bunny.obj", {902, 453, 0}},
-      {"stanford_armadillo_86k.obj", {86482, 43243, 0}}, {"stanford_dragon_res3.obj", {47794, 22998, 0}},
-      {"utah_teapot.obj", {6320, 3644, 0}},              {"suzanne.obj", {968, 507, 0}},
-      {"spot.obj", {5856, 2930, 0}},                     {"env.obj", {2180, 6540, 0}},
-      {"rob.obj", {216, 648, 0}},                        {"bullet_diff_ring.obj", {57640, 28816, 0}},
-      {"bullet_kiva_pod_lowres.obj", {10184, 5204, 0}},  {"bullet_leoTest1.obj", {41262, 21979, 22}},
+      {"stanford_bunny.obj", {69451, 35947, 0}},
+      {"stanford_bunny_res2.obj", {16301, 8171, 0}},
+      {"stanford_bunny_res3.obj", {3851, 1889, 0}},
+      {"stanford_bunny_res4.obj", {948, 453, 0}},
+      {"bunny_libigl_closed.obj", {6966, 3485, 0}},
+      {"ode_bunny.obj", {902, 453, 0}},
+      {"stanford_armadillo_86k.obj", {86482, 43243, 0}},
+      {"stanford_dragon_res3.obj", {47794, 22998, 0}},
+      {"utah_teapot.obj", {6320, 3644, 0}},
+      {"suzanne.obj", {968, 507, 0}},
+      {"spot.obj", {5856, 2930, 0}},
+      {"env.obj", {2180, 6540, 0}},
+      {"rob.obj", {216, 648, 0}},
+      {"bullet_diff_ring.obj", {57640, 28816, 0}},
+      {"bullet_kiva_pod_lowres.obj", {10184, 5204, 0}},
+      {"bullet_leoTest1.obj", {41262, 21979, 22}},
   };
   return table;
 }

@@ -13,6 +13,11 @@
 //    the PLY parser skips unparsable values). While Assimp runs we install a logger that records
 //    warnings and errors, and fail the load on any. No post-processing step is used: they may
 //    reorder or re-triangulate faces (aiProcess_Triangulate does not promise fans in order).
+//    Assimp 5.2 is not safe on every bad input, so each format is checked before it reads it:
+//    STL's binary size (it only says "failed to determine STL storage representation"), PLY's
+//    structure (its reader hangs or reads out of bounds on truncated files) and OFF's counts and
+//    line lengths (it allocates what the header says, and overflows a line buffer).
+//    Assimp keeps coordinates in float (ai_real), so STL/PLY/OFF vertices are float values.
 #include "boxtree/io.h"
 
 #include <algorithm>
@@ -33,13 +38,13 @@
 #include <vector>
 
 #define TINYOBJLOADER_IMPLEMENTATION
+#include <assimp/MemoryIOWrapper.h>
+#include <assimp/scene.h>
 #include <tiny_obj_loader.h>
 
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/Logger.hpp>
-#include <assimp/MemoryIOWrapper.h>
-#include <assimp/scene.h>
 
 #include "boxtree/error.h"
 
@@ -113,7 +118,7 @@ void append_fan(const std::string& path, const VertexId* corners, std::size_t co
 // A read-only stream over the file's bytes whose read position tells which line tinyobjloader has
 // just consumed.
 class MemoryBuffer : public std::streambuf {
-public:
+ public:
   MemoryBuffer(const char* begin, const char* end) {
     char* b = const_cast<char*>(begin);  // never written: std::streambuf only reads through it
     setg(b, b, const_cast<char*>(end));
@@ -257,8 +262,8 @@ struct ObjReader {
       fail(*path, at_line(line) + "malformed face record " + shown(text));
     }
     if (corner_count < 3) {
-      fail(*path, at_line(line) + "face record with " + std::to_string(corner_count) +
-                      " corners (a facet needs at least 3)");
+      fail(*path,
+           at_line(line) + "face record with " + std::to_string(corner_count) + " corners (a facet needs at least 3)");
     }
     corners.clear();
     const std::size_t defined = mesh.vertices.size();  // relative indices count back from here
@@ -368,12 +373,12 @@ TriangleMesh load_obj(const std::string& path, const std::string& data) {
 
 // Records Assimp's warnings and errors instead of printing them.
 class CapturingLogger final : public Assimp::Logger {
-public:
+ public:
   explicit CapturingLogger(std::vector<std::string>* problems) : problems_(problems) {}
   bool attachStream(Assimp::LogStream*, unsigned int) override { return false; }
   bool detachStream(Assimp::LogStream*, unsigned int) override { return false; }
 
-private:
+ private:
   void OnDebug(const char*) override {}
   void OnVerboseDebug(const char*) override {}
   void OnInfo(const char*) override {}
@@ -403,8 +408,8 @@ std::string one_line(std::string text) {
 // anything else it calls "failed to determine STL storage representation". Say what is wrong.
 void check_stl_storage(const std::string& path, const std::string& data) {
   const std::size_t first = data.find_first_not_of(" \t\r\n");
-  const bool text = first != std::string::npos && data.compare(first, 5, "solid") == 0 &&
-                    data.find('\0') == std::string::npos;
+  const bool text =
+      first != std::string::npos && data.compare(first, 5, "solid") == 0 && data.find('\0') == std::string::npos;
   if (data.size() >= 84) {
     std::uint32_t count = 0;
     std::memcpy(&count, data.data() + 80, 4);  // little-endian, as the format says (and x86/ARM are)
@@ -449,11 +454,11 @@ bool ply_type(std::string_view name, int* size, bool* is_signed, bool* is_intege
     int size;
     bool is_signed, is_integer;
   };
-  static const Type types[] = {{"char", 1, true, true},     {"int8", 1, true, true},      {"uchar", 1, false, true},
-                               {"uint8", 1, false, true},   {"short", 2, true, true},     {"int16", 2, true, true},
-                               {"ushort", 2, false, true},  {"uint16", 2, false, true},   {"int", 4, true, true},
-                               {"int32", 4, true, true},    {"uint", 4, false, true},     {"uint32", 4, false, true},
-                               {"float", 4, true, false},   {"float32", 4, true, false},  {"double", 8, true, false},
+  static const Type types[] = {{"char", 1, true, true},     {"int8", 1, true, true},     {"uchar", 1, false, true},
+                               {"uint8", 1, false, true},   {"short", 2, true, true},    {"int16", 2, true, true},
+                               {"ushort", 2, false, true},  {"uint16", 2, false, true},  {"int", 4, true, true},
+                               {"int32", 4, true, true},    {"uint", 4, false, true},    {"uint32", 4, false, true},
+                               {"float", 4, true, false},   {"float32", 4, true, false}, {"double", 8, true, false},
                                {"float64", 8, true, false}, {"double64", 8, true, false}};
   for (const Type& t : types) {
     if (name == t.name) {
@@ -493,12 +498,14 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
     const std::vector<std::string_view> fields = split_fields(text);
     const std::string_view keyword = fields.empty() ? std::string_view() : fields[0];
     if (line == 1) {
-      if (fields.size() != 1 || (keyword != "ply" && keyword != "PLY")) malformed(line, "the file must start with 'ply'");
+      if (fields.size() != 1 || (keyword != "ply" && keyword != "PLY"))
+        malformed(line, "the file must start with 'ply'");
       continue;
     }
     if (line == 2) {
       // Assimp looks for the format on the second line only.
-      if (fields.size() != 3 || keyword != "format") malformed(line, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+      if (fields.size() != 3 || keyword != "format")
+        malformed(line, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
       if (fields[1] == "binary_little_endian") {
         binary = true;
       } else if (fields[1] == "binary_big_endian") {
@@ -524,7 +531,8 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
       if (elements.empty()) malformed(line, "property before any element");
       // Assimp stops reading an element's properties at the first other line and silently drops
       // the rest, so such headers are refused rather than misread.
-      if (properties_closed) malformed(line, "property after a comment or blank line inside an element (not supported)");
+      if (properties_closed)
+        malformed(line, "property after a comment or blank line inside an element (not supported)");
       PlyProperty property;
       bool value_signed = false, value_integer = false, count_integer = false;
       const bool is_list = fields.size() >= 2 && fields[1] == "list";
@@ -578,9 +586,9 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
       }
       if (!has_list) {
         if (element.count * fixed > size - offset) {
-          fail(path, "truncated PLY file: element '" + element.name + "' needs " + std::to_string(element.count * fixed) +
-                         " bytes at offset " + std::to_string(offset) + " but the file has " + std::to_string(size) +
-                         " bytes");
+          fail(path, "truncated PLY file: element '" + element.name + "' needs " +
+                         std::to_string(element.count * fixed) + " bytes at offset " + std::to_string(offset) +
+                         " but the file has " + std::to_string(size) + " bytes");
         }
         offset += element.count * fixed;
         continue;
@@ -589,7 +597,8 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
         for (const PlyProperty& p : element.properties) {
           std::uint64_t need = p.value_size;
           if (p.count_size > 0) {
-            if (p.count_size > size - offset) need = p.count_size;  // reported below
+            if (static_cast<std::uint64_t>(p.count_size) > size - offset)
+              need = p.count_size;  // reported below
             else {
               const std::int64_t n = read_count(offset, p);
               if (n < 0) {
@@ -626,7 +635,8 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
       std::string_view text(data.data() + at, end - at);
       at = end + 1;
       if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
-      if (text.find('\r') != std::string_view::npos) malformed(line, "stray CR byte (CR-only line ends are not supported)");
+      if (text.find('\r') != std::string_view::npos)
+        malformed(line, "stray CR byte (CR-only line ends are not supported)");
       const std::vector<std::string_view> fields = split_fields(text);
       if (fields.empty()) malformed(line, "blank line inside the data");
       std::size_t next = 0;
@@ -637,7 +647,8 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
           const std::string_view count = fields[next++];
           const auto result = std::from_chars(count.data(), count.data() + count.size(), values);
           if (result.ec != std::errc() || result.ptr != count.data() + count.size()) {
-            malformed(line, "bad list length " + shown(count) + " in element '" + element.name + "' " + std::to_string(i));
+            malformed(line,
+                      "bad list length " + shown(count) + " in element '" + element.name + "' " + std::to_string(i));
           }
         }
         if (values > fields.size() - next) {
@@ -655,11 +666,60 @@ bool check_ply_structure(const std::string& path, const std::string& data) {
   return data.back() != '\n';
 }
 
+// Assimp 5.2's OFF reader allocates what the header's counts ask for before reading any data
+// (a corrupt count means gigabytes), and copies each line into a 4096-byte buffer writing one byte
+// past it for longer lines. Both are refused here: counts must fit the file's lines.
+void check_off_structure(const std::string& path, const std::string& data) {
+  std::size_t lines = 0;
+  for (std::size_t at = 0, line = 1; at < data.size(); ++line) {
+    std::size_t end = data.find_first_of("\r\n", at);
+    if (end == std::string::npos) end = data.size();
+    if (end - at >= 4096) {
+      fail(path, "malformed OFF file: line " + std::to_string(line) + " is longer than 4095 characters");
+    }
+    at = end + (data.compare(end, 2, "\r\n") == 0 ? 2 : 1);
+    lines = line;
+  }
+  // The header as Assimp reads it: [ST][C][N][4][n]OFF (optional), a dimension after "nOFF",
+  // then the vertex, face and edge counts; '#' starts a comment.
+  std::vector<std::string_view> tokens;
+  for (std::size_t at = 0; at < data.size() && tokens.size() < 5;) {
+    const char c = data[at];
+    if (c == '#') {
+      at = data.find_first_of("\r\n", at);
+    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\n') {
+      ++at;
+    } else {
+      std::size_t end = data.find_first_of(" \t\r\n#", at);
+      if (end == std::string::npos) end = data.size();
+      tokens.emplace_back(data.data() + at, end - at);
+      at = end;
+    }
+  }
+  std::size_t next = 0;
+  if (!tokens.empty() && tokens[0].size() >= 3 && tokens[0].substr(tokens[0].size() - 3) == "OFF") {
+    next = tokens[0].find('n') != std::string_view::npos ? 2 : 1;
+  }
+  std::uint64_t counts[2] = {0, 0};
+  for (int i = 0; i < 2; ++i) {
+    const std::string_view token = next + i < tokens.size() ? tokens[next + i] : std::string_view();
+    const auto result = std::from_chars(token.data(), token.data() + token.size(), counts[i]);
+    if (token.empty() || result.ec != std::errc() || result.ptr != token.data() + token.size()) {
+      fail(path, "malformed OFF file: bad header: expected vertex and face counts, found " + shown(token));
+    }
+  }
+  if (counts[0] > lines || counts[1] > lines - counts[0]) {
+    fail(path, "truncated OFF file: the header declares " + std::to_string(counts[0]) + " vertices and " +
+                   std::to_string(counts[1]) + " faces but the file has " + std::to_string(lines) + " lines");
+  }
+}
+
 TriangleMesh load_with_assimp(const std::string& path, const std::string& data, const std::string& ext) {
   const std::string format = ext.substr(1);  // "stl", "ply" or "off"
   std::string upper = format;
   std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return char(c - 'a' + 'A'); });
   if (format == "stl") check_stl_storage(path, data);
+  if (format == "off") check_off_structure(path, data);
   std::string terminated;  // a copy, only when Assimp needs a final line end
   if (format == "ply" && check_ply_structure(path, data)) terminated = data + '\n';
   const std::string& bytes = terminated.empty() ? data : terminated;
@@ -704,8 +764,8 @@ TriangleMesh load_with_assimp(const std::string& path, const std::string& data, 
     }
     for (unsigned f = 0; f < part->mNumFaces; ++f, ++polygon) {
       const aiFace& face = part->mFaces[f];
-      const std::string where = "polygon " + std::to_string(polygon) + " (facet " +
-                                std::to_string(mesh.triangles.size()) + "): ";
+      const std::string where =
+          "polygon " + std::to_string(polygon) + " (facet " + std::to_string(mesh.triangles.size()) + "): ";
       if (face.mNumIndices < 3) {
         fail(path, where + std::to_string(face.mNumIndices) + " corners (a facet needs at least 3)");
       }

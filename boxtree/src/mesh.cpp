@@ -1,14 +1,13 @@
 // Mesh validation and statistics (contracts in boxtree/mesh.h).
 #include "boxtree/mesh.h"
 
+#include <Eigen/Geometry>  // cross()
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>  // cross()
 
 #include "boxtree/error.h"
 
