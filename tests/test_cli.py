@@ -125,9 +125,31 @@ expect_error("ray short line", ["ray", square, "--rays", bad_rays], ["bad_rays.t
 expect_error("ray zero direction", ["ray", square, "--rays", write("zero.txt", "0 0 1 0 0 0\n")], ["zero.txt:1", "zero"])
 expect_error("ray missing file", ["ray", square, "--rays", os.path.join(scratch, "nope.txt")], ["nope.txt"])
 
+# every method gives the same answers (the exact tests decide; the volumes only prune)
+methods = ["aabb", "obb-all", "obb-max", "obb-min", "pie-max", "pie-min", "pie-max-general", "pie-min-general",
+           "pie-min+aabb@2", "obb-min+aabb@3"]
+bumpy = os.path.join(scratch, "bumpy.obj")
+run("generate", "bumpy-sphere", "--size", "10", "--seed", "4", "--out", bumpy)
+sphere_rays = write("sphere_rays.txt", "".join(f"{0.1 * i - 1} {0.05 * i} 3  0.01 {-0.02 * i} -1\n" for i in range(20)))
+reference = None
+for m in methods:
+    code, info_out, err = run("info", bumpy, "--method", m, "--json")
+    check(f"info --method {m}", code == 0 and json.loads(info_out)["nodes"] == 2 * json.loads(info_out)["facets"] - 1, err)
+    code, col_out, err = run("collide", bumpy, bumpy, "--method", m, "--transform", rot, "--json")
+    code2, ray_out, err2 = run("ray", bumpy, "--rays", sphere_rays, "--method", m, "--json")
+    if code != 0 or code2 != 0:
+        check(f"collide/ray --method {m}", False, err + err2)
+        continue
+    answer = (json.loads(col_out)["pairs"], [(r["facet"], r["t"]) for r in map(json.loads, ray_out.splitlines())])
+    if reference is None:
+        reference = answer
+        check("the method check has intersecting pairs", answer[0] > 0, answer[0])
+    check(f"--method {m} gives aabb's answers", answer == reference, f"{answer[0]} pairs vs {reference[0]}")
+
 # errors common to all subcommands
 for sub in (["info", square], ["collide", square, square], ["ray", square, "--rays", rays]):
-    expect_error(f"{sub[0]} unknown method", [*sub, "--method", "octree"], ["octree", "aabb"])
+    expect_error(f"{sub[0]} unknown method", [*sub, "--method", "octree"], ["octree", "aabb", "pie-min", "obb-all"])
+    expect_error(f"{sub[0]} bad hybrid level", [*sub, "--method", "pie-min+aabb@0"], ["pie-min+aabb@0"])
 expect_error("missing mesh", ["info", os.path.join(scratch, "missing.obj")], ["missing.obj"])
 expect_error("bad index", ["info", write("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")], ["bad_index.obj"])
 expect_error("unknown subcommand", ["explode"], ["explode"])

@@ -16,7 +16,7 @@
 #include <chrono>
 #include <numeric>
 
-#include "boxtree/volume/volume.h"
+#include "boxtree/detail/volume_kinds.h"
 
 namespace boxtree {
 namespace {
@@ -195,11 +195,45 @@ void greedy_matching(const std::vector<Candidate>& candidates, std::size_t m, st
   }
 }
 
+// The hybrid of a tree (volume/hybrid.h): the same topology, with the volumes of nodes at
+// `level` and above replaced by the smallest boxes enclosing their children. Children always
+// have larger indices than their parent (depth-first layout), so one backward pass sees every
+// child before its parent.
+template <class Lower>
+Tree<Hybrid<Lower>> make_hybrid(const Tree<Lower>& tree, int level) {
+  const std::size_t count = tree.node_count();
+  std::vector<int> height(count, 0);
+  std::vector<Hybrid<Lower>> volumes(count);
+  std::vector<std::uint32_t> links(count);
+  for (std::size_t i = count; i-- > 0;) {
+    const NodeIndex node = NodeIndex(i);
+    if (tree.is_leaf(node)) {
+      links[i] = Tree<Hybrid<Lower>>::kLeafFlag | tree.facet(node);
+    } else {
+      const NodeIndex c = tree.first_child(node);
+      BOXTREE_ASSERT(c > node, "children follow their parent in the layout");
+      links[i] = c;
+      height[i] = 1 + std::max(height[c], height[c + 1]);
+    }
+    if (height[i] >= level && !tree.is_leaf(node)) {
+      const NodeIndex c = tree.first_child(node);
+      volumes[i] = Hybrid<Lower>::upper(Aabb::enclosing(volumes[c].bounds(), volumes[c + 1].bounds()));
+    } else {
+      volumes[i] = Hybrid<Lower>{tree.volume(node), Aabb(), false};
+    }
+  }
+  return Tree<Hybrid<Lower>>(tree.shared_mesh(), std::move(volumes), std::move(links), tree.height());
+}
+
 }  // namespace
 
 template <class Volume>
 Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const BuildSettings& settings,
                         BuildStats* stats) {
+  if constexpr (is_hybrid_v<Volume>) {
+    if (settings.hybrid_level < 1) throw Error("build_tree: a hybrid method needs hybrid_level >= 1");
+    return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level);
+  }
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
   const TriangleMesh& mesh = *mesh_ptr;
@@ -329,6 +363,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), height);
 }
 
-template Tree<Aabb> build_tree<Aabb>(std::shared_ptr<const TriangleMesh>, const BuildSettings&, BuildStats*);
+#define BOXTREE_INSTANTIATE_BUILD(V) \
+  template Tree<V> build_tree<V>(std::shared_ptr<const TriangleMesh>, const BuildSettings&, BuildStats*);
+BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_BUILD)
 
 }  // namespace boxtree

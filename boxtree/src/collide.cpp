@@ -5,7 +5,7 @@
 
 #include <Eigen/LU>
 
-#include "boxtree/volume/volume.h"
+#include "boxtree/detail/volume_kinds.h"
 
 namespace boxtree {
 
@@ -84,9 +84,11 @@ std::vector<FacetPair> collide(const Tree<Volume>& a, const Tree<Volume>& b, con
   return pairs;
 }
 
-template void collide<Aabb>(const Tree<Aabb>&, const Tree<Aabb>&, const RigidTransform&,
-                            FunctionRef<bool(const FacetPair&)>, QueryStats*, const CollideSettings&);
-template std::vector<FacetPair> collide<Aabb>(const Tree<Aabb>&, const Tree<Aabb>&, const RigidTransform&, QueryStats*,
-                                              const CollideSettings&);
+#define BOXTREE_INSTANTIATE_COLLIDE(V)                                                                     \
+  template void collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&,                            \
+                           FunctionRef<bool(const FacetPair&)>, QueryStats*, const CollideSettings&);        \
+  template std::vector<FacetPair> collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&, QueryStats*, \
+                                             const CollideSettings&);
+BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_COLLIDE)
 
 }  // namespace boxtree

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "boxtree/volume/volume.h"
+#include "boxtree/detail/volume_kinds.h"
 
 namespace boxtree {
 namespace {
@@ -246,6 +246,6 @@ std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QuerySta
   template void query_overlap<V, S>(const Tree<V>&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, FacetTest); \
   template std::vector<FacetId> query_overlap<V, S>(const Tree<V>&, const S&, QueryStats*, FacetTest);
 
-BOXTREE_INSTANTIATE_QUERIES(Aabb)
+BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_QUERIES)
 
 }  // namespace boxtree

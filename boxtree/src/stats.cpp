@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "boxtree/volume/volume.h"
+#include "boxtree/detail/volume_kinds.h"
 
 namespace boxtree {
 namespace {
@@ -144,7 +144,9 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
   return "";
 }
 
-template TreeStats compute_tree_stats<Aabb>(const Tree<Aabb>&);
-template std::string validate_tree<Aabb>(const Tree<Aabb>&, Real);
+#define BOXTREE_INSTANTIATE_STATS(V)                         \
+  template TreeStats compute_tree_stats<V>(const Tree<V>&); \
+  template std::string validate_tree<V>(const Tree<V>&, Real);
+BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_STATS)
 
 }  // namespace boxtree

@@ -74,7 +74,7 @@ void print_json(const json& j) { std::cout << j.dump() << "\n"; }
 
 int run_info(const Options& o, const std::string& path) {
   const Method method = parse_method(o.method);
-  const BuildSettings settings = settings_of(o);
+  const BuildSettings settings = settings_for(method, settings_of(o));
   auto mesh = std::make_shared<const TriangleMesh>(load_mesh(path));
   const MeshStats mesh_stats = compute_mesh_stats(*mesh);
   return with_method(method, [&](auto tag) {
@@ -122,7 +122,7 @@ int run_info(const Options& o, const std::string& path) {
 int run_collide(const Options& o, const std::string& path_a, const std::string& path_b, const std::string& transform_text,
                 bool first_only) {
   const Method method = parse_method(o.method);
-  const BuildSettings settings = settings_of(o);
+  const BuildSettings settings = settings_for(method, settings_of(o));
   RigidTransform a_from_b;
   Eigen::Matrix<double, 3, 4> affine = Eigen::Matrix<double, 3, 4>::Zero();
   affine.leftCols<3>() = Mat3::Identity();
@@ -213,7 +213,7 @@ std::vector<Ray> read_rays(const std::string& path) {
 
 int run_ray(const Options& o, const std::string& path, const std::string& rays_path) {
   const Method method = parse_method(o.method);
-  const BuildSettings settings = settings_of(o);
+  const BuildSettings settings = settings_for(method, settings_of(o));
   auto mesh = std::make_shared<const TriangleMesh>(load_mesh(path));
   const std::vector<Ray> rays = read_rays(rays_path);
   return with_method(method, [&](auto tag) {
@@ -272,8 +272,9 @@ int main(int argc, char** argv) {
   CLI::App app{"boxtree: bottom-up bounding-volume hierarchies (BOXTREE, Barequet et al.) for triangle meshes"};
   app.require_subcommand(1);
   Options options;
-  std::string method_help = "Hierarchy method: ";
-  for (const std::string& n : method_names()) method_help += n + " ";
+  std::string method_help = "Hierarchy method:";
+  for (const std::string& n : method_names()) method_help += " " + n;
+  method_help += ", or a hybrid M+aabb@L (method M below level L, boxes from level L up)";
   auto add_common = [&](CLI::App* sub) {
     sub->add_option("--method", options.method, method_help)->capture_default_str();
     sub->add_option("--cost", options.cost, "Merge cost of a candidate pair: area or volume")->capture_default_str();

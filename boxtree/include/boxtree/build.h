@@ -22,6 +22,9 @@ struct BuildSettings {
   // Nodes keep at most this many adjacency candidates (the cheapest), bounding the work per
   // round around high-valence vertices (e.g. the apex of a cone).
   int max_neighbors = 16;
+  // For hybrid volume kinds (volume/hybrid.h) only: nodes at this level and above (level =
+  // subtree height, leaves 0) get axis-aligned boxes. Must be >= 1 for hybrids.
+  int hybrid_level = 0;
 };
 
 struct BuildStats {

@@ -36,6 +36,13 @@ bool intersect_ray(const Obb& box, const RayPrecomputed& ray, Real t_min, Real t
 Obb obb_from_triangle(const Vec3& a, const Vec3& b, const Vec3& c);
 Obb obb_enclosing(const Obb& x, const Obb& y, PrincipalAxis axis);
 
+namespace detail {
+// The leaf rules' frame of a facet (shared by obb_from_triangle and prism_from_triangle): an
+// orthonormal (u, v, normal), u along the longest edge and v by Gram-Schmidt, so the corners lie
+// in the (u, v) plane to rounding even for needles. False for a point (an arbitrary frame).
+bool facet_frame(const Vec3& a, const Vec3& b, const Vec3& c, Vec3& u, Vec3& v, Vec3& normal);
+}  // namespace detail
+
 template <PrincipalAxis kAxis>
 struct OrientedBox {
   Obb box;
