@@ -86,7 +86,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Reproduce the BOXTREE paper's Figures 3-4 and Table 1"};
   std::string out_dir = "bench/paper/results";
   std::string mesh_dir = "../shared/meshes";
-  std::string methods_text = "aabb,obb-all,obb-max,obb-min,pie-max,pie-min,pie-max-general,pie-min-general";
+  std::string methods_text =
+      "aabb,obb-all,obb-max,obb-min,pie-max,pie-min,pie-max-general,pie-min-general,obb-min+aabb@3,pie-min+aabb@3,"
+      "pie-min-general+aabb@3";
   int repeats = 5;
   bool quick = false;
   bool with_fcl = true;
