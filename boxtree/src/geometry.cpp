@@ -13,6 +13,8 @@
 //  * No heap allocation and no exceptions: these run in the inner loops of every query.
 #include "boxtree/geometry.h"
 
+#include "internal.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -220,46 +222,6 @@ Real segment_box_squared_distance(const Vec3& p0, const Vec3& p1, const Aabb& bo
   return best;
 }
 
-// Separating-axis test of an axis-aligned box (half extents ha, at the origin) against a box with
-// center t, axes r.col(j) and half extents hb, all in the first box's frame (Gottschalk, Lin,
-// Manocha, "OBBTree", SIGGRAPH 1996, Sec. 4; Ericson 4.4.1). 15 axes: 3 + 3 face normals and the
-// 9 edge cross products; enough for flat boxes too (a rectangle's or a segment's candidate axes
-// are among them).
-bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb) {
-  // Gottschalk's epsilon on |R|: when two edges are (nearly) parallel their cross product is
-  // (nearly) zero and rounding noise in R alone could decide the test. Padding the radii by
-  // kEps * (box sizes), plus kEps * |t| for the rounding of the projected center distance, keeps
-  // the test conservative: it may report boxes that are apart by ~1e-12 of their sizes and
-  // distance as overlapping, never the reverse. The |t| term is what covers boxes that are flat
-  // in two axes (segments), whose padded radii can be zero.
-  constexpr Real kEps = 1e-12;
-  const Real slack = kEps * t.cwiseAbs().sum();
-  Mat3 abs_r;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) abs_r(i, j) = std::abs(r(i, j)) + kEps;
-  }
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(t[i]) > ha[i] + hb.dot(abs_r.row(i)) + slack) return false;
-  }
-  for (int j = 0; j < 3; ++j) {
-    if (std::abs(t.dot(r.col(j))) > ha.dot(abs_r.col(j)) + hb[j] + slack) return false;
-  }
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3;
-    const int i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      const int j1 = (j + 1) % 3;
-      const int j2 = (j + 2) % 3;
-      // L = A_i x B_j has components L[i1] = -r(i2, j), L[i2] = r(i1, j) in A's frame; B_m . L
-      // is +-r(i, third index) because B's axes are orthonormal.
-      const Real distance = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
-      const Real ra = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
-      const Real rb = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
-      if (distance > ra + rb + slack) return false;
-    }
-  }
-  return true;
-}
 
 // Watertight ray/triangle (Woop, Benthin, Wald, JCGT 2013): the edge function of the directed
 // edge p -> q in the sheared 2D frame, U = qx*py - qy*px for the edge opposite a (the paper's
@@ -287,6 +249,47 @@ Real edge_function(Real px, Real py, Real qx, Real qy) {
 }
 
 }  // namespace
+
+// Separating-axis test of an axis-aligned box (half extents ha, at the origin) against a box with
+// center t, axes r.col(j) and half extents hb, all in the first box's frame (Gottschalk, Lin,
+// Manocha, "OBBTree", SIGGRAPH 1996, Sec. 4; Ericson 4.4.1). 15 axes: 3 + 3 face normals and the
+// 9 edge cross products; enough for flat boxes too (a rectangle's or a segment's candidate axes
+// are among them).
+bool detail::boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb) {
+  // Gottschalk's epsilon on |R|: when two edges are (nearly) parallel their cross product is
+  // (nearly) zero and rounding noise in R alone could decide the test. Padding the radii by
+  // kEps * (box sizes), plus kEps * |t| for the rounding of the projected center distance, keeps
+  // the test conservative: it may report boxes that are apart by ~1e-12 of their sizes and
+  // distance as overlapping, never the reverse. The |t| term is what covers boxes that are flat
+  // in two axes (segments), whose padded radii can be zero.
+  constexpr Real kEps = 1e-12;
+  const Real slack = kEps * t.cwiseAbs().sum();
+  Mat3 abs_r;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) abs_r(i, j) = std::abs(r(i, j)) + kEps;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::abs(t[i]) <= ha[i] + hb.dot(abs_r.row(i)) + slack)) return false;
+  }
+  for (int j = 0; j < 3; ++j) {
+    if (!(std::abs(t.dot(r.col(j))) <= ha.dot(abs_r.col(j)) + hb[j] + slack)) return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3;
+    const int i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3;
+      const int j2 = (j + 2) % 3;
+      // L = A_i x B_j has components L[i1] = -r(i2, j), L[i2] = r(i1, j) in A's frame; B_m . L
+      // is +-r(i, third index) because B's axes are orthonormal.
+      const Real distance = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
+      const Real ra = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
+      const Real rb = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
+      if (!(distance <= ra + rb + slack)) return false;
+    }
+  }
+  return true;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Ray / triangle
@@ -610,13 +613,13 @@ Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec
 
 bool overlaps(const Aabb& box, const Obb& obb) {
   if (box.is_empty()) return false;
-  return boxes_overlap((box.max - box.min) * Real(0.5), obb.center - box.center(), obb.axes, obb.half_extents);
+  return detail::boxes_overlap((box.max - box.min) * Real(0.5), obb.center - box.center(), obb.axes, obb.half_extents);
 }
 
 bool overlaps(const Aabb& a, const Aabb& b, const RigidTransform& a_from_b) {
   if (a.is_empty() || b.is_empty()) return false;
   const Vec3 b_center = a_from_b.apply(b.center());
-  return boxes_overlap((a.max - a.min) * Real(0.5), b_center - a.center(), a_from_b.rotation,
+  return detail::boxes_overlap((a.max - a.min) * Real(0.5), b_center - a.center(), a_from_b.rotation,
                        (b.max - b.min) * Real(0.5));
 }
 

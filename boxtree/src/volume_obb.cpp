@@ -14,6 +14,7 @@
 #include "boxtree/detail/fit.h"
 #include "boxtree/geometry.h"
 #include "boxtree/volume/obb.h"
+#include "internal.h"
 
 namespace boxtree {
 namespace {
@@ -27,9 +28,6 @@ constexpr Real kShapeSlack = 256 * kEpsilon;
 // intersect_ray), and relative padding of each slab's t like the AABB test.
 constexpr Real kRayMargin = 64 * kEpsilon;
 constexpr Real kRayPad = 4 * kEpsilon;
-// Gottschalk's epsilon on |R| (as in the AABB/OBB test of geometry.cpp): keeps the 15-axis test
-// conservative when edges are nearly parallel.
-constexpr Real kBoxEps = 1e-12;
 // A box whose smallest half extent is below this fraction of its largest is "flat" for the
 // nearly-coplanar refinement of the box/box test (see overlaps_in_frame).
 constexpr Real kFlat = 1e-3;
@@ -45,38 +43,6 @@ bool valid_box(const Obb& box) {
 
 bool is_flat(const Vec3& half_extents) { return half_extents.minCoeff() <= kFlat * half_extents.maxCoeff(); }
 
-// Separating-axis test of the box {|x_i| <= ha_i} against the box with center t, axes r.col(j)
-// and half extents hb, given in the first box's frame (Gottschalk, Lin, Manocha, "OBBTree",
-// SIGGRAPH 1996, Sec. 4; Ericson, Real-Time Collision Detection, 4.4.1). The 15 axes are enough
-// for flat and degenerate boxes too: the three axes of a box span every direction, so for each
-// edge of the Minkowski difference some face axis is normal to it and not normal to its plane
-// (see polytope.cpp). Padding as in geometry.cpp: kBoxEps on |R| and kBoxEps * |t|_1.
-bool boxes_overlap_local(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb) {
-  const Real slack = kBoxEps * t.cwiseAbs().sum();
-  Mat3 abs_r;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) abs_r(i, j) = std::abs(r(i, j)) + kBoxEps;
-  }
-  for (int i = 0; i < 3; ++i) {
-    if (!(std::abs(t[i]) <= ha[i] + hb.dot(abs_r.row(i)) + slack)) return false;
-  }
-  for (int j = 0; j < 3; ++j) {
-    if (!(std::abs(t.dot(r.col(j))) <= ha.dot(abs_r.col(j)) + hb[j] + slack)) return false;
-  }
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3;
-    const int i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      const int j1 = (j + 1) % 3;
-      const int j2 = (j + 2) % 3;
-      const Real distance = std::abs(t[i2] * r(i1, j) - t[i1] * r(i2, j));
-      const Real ra = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
-      const Real rb = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
-      if (!(distance <= ra + rb + slack)) return false;
-    }
-  }
-  return true;
-}
 
 // Box/box in world (or any common) frame. When both boxes are flat and the 15 axes say
 // "overlap", the generic test adds the in-plane axes of nearly coplanar pairs, where Gottschalk's
@@ -84,20 +50,11 @@ bool boxes_overlap_local(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec
 bool obb_obb(const Obb& a, const Obb& b) {
   const Vec3 t = a.axes.transpose() * (b.center - a.center);
   const Mat3 r = a.axes.transpose() * b.axes;
-  if (!boxes_overlap_local(a.half_extents, t, r, b.half_extents)) return false;
+  if (!detail::boxes_overlap(a.half_extents, t, r, b.half_extents)) return false;
   if (is_flat(a.half_extents) && is_flat(b.half_extents)) return sat_overlap(polytope_of(a), polytope_of(b));
   return true;
 }
 
-// Duff, Burgess, Christensen, Hery, Kensler, Liani, Villemin, "Building an Orthonormal Basis,
-// Revisited", JCGT 6(1), 2017: (b1, b2, n) orthonormal for unit n, branch-free of any threshold.
-void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2) {
-  const Real sign = std::copysign(Real(1), n.z());
-  const Real a = -1 / (sign + n.z());
-  const Real b = n.x() * n.y() * a;
-  b1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
-  b2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
-}
 
 // The box with the given axes that encloses `points` most tightly: its center is the middle of
 // the points' projections on the axes (not their centroid, which would not give the smallest
@@ -147,6 +104,14 @@ Mat3 frame_from_rectangle(const Vec3& u, const Vec3& v, const detail::Rectangle2
 
 }  // namespace
 
+void detail::orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2) {
+  const Real sign = std::copysign(Real(1), n.z());
+  const Real a = -1 / (sign + n.z());
+  const Real b = n.x() * n.y() * a;
+  b1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+  b2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
+}
+
 // An orthonormal frame (u, v, normal) with u, v spanning the facet's plane, by Gram-Schmidt on
 // its corners: u along the longest edge, v along the rest of the opposite corner. Unlike the
 // normalized cross product of two edges, whose direction is only known to ~eps L^2 / |n| (an
@@ -183,7 +148,7 @@ bool detail::facet_frame(const Vec3& a, const Vec3& b, const Vec3& c, Vec3& u, V
     v = w / w_length;
     v = (v - u.dot(v) * u).normalized();  // one more pass: u . v to rounding
   } else {
-    orthonormal_completion(u, v, normal);
+    detail::orthonormal_completion(u, v, normal);
   }
   normal = u.cross(v);
   return true;

@@ -20,6 +20,7 @@
 #include "boxtree/error.h"
 #include "boxtree/geometry.h"
 #include "boxtree/volume/pie_slice.h"
+#include "internal.h"
 
 namespace boxtree {
 
@@ -58,14 +59,6 @@ int longest_edge_index(const Prism& prism) {
   return longest;
 }
 
-// Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017 (as in volume_obb.cpp).
-void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2) {
-  const Real sign = std::copysign(Real(1), n.z());
-  const Real a = -1 / (sign + n.z());
-  const Real b = n.x() * n.y() * a;
-  b1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
-  b2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
-}
 
 // Unit in-plane directions: u along the longest base edge (any direction normal to the axis if
 // the base is a point), v = axis x u.
@@ -79,7 +72,7 @@ void in_plane_frame(const Prism& prism, Vec3& u, Vec3& v) {
     u = flat / len;
     v = prism.axis.cross(u);
   } else {
-    orthonormal_completion(prism.axis, u, v);
+    detail::orthonormal_completion(prism.axis, u, v);
   }
 }
 
