@@ -43,6 +43,7 @@
 #include "boxtree/geometry.h"
 #include "boxtree/volume/pie_slice.h"
 #include "boxtree/volume/volume.h"
+#include "support/exact.h"
 
 namespace boxtree {
 
@@ -56,6 +57,8 @@ static_assert(is_volume_v<PieMaxGeneral>, "PieMaxGeneral must provide every volu
 static_assert(is_volume_v<PieMinGeneral>, "PieMinGeneral must provide every volume operation");
 
 namespace {
+
+using namespace test;
 
 int scaled(int n) {
   static const double scale = [] {
@@ -125,151 +128,6 @@ std::array<Vec3, 3> random_triangle(Random& rng, const Vec3& center, Real size, 
   return t;
 }
 
-// ------------------------------------------------------------------------------------------
-// Exact rational arithmetic and an exact LP feasibility oracle (as in test_geometry.cpp)
-
-using Int = __int128;
-
-Int abs_int(Int x) { return x < 0 ? -x : x; }
-Int gcd_int(Int a, Int b) {
-  a = abs_int(a);
-  b = abs_int(b);
-  while (b != 0) {
-    const Int r = a % b;
-    a = b;
-    b = r;
-  }
-  return a;
-}
-Int mul_checked(Int a, Int b) {
-  Int r;
-  if (__builtin_mul_overflow(a, b, &r)) throw std::overflow_error("rational overflow");
-  return r;
-}
-Int add_checked(Int a, Int b) {
-  Int r;
-  if (__builtin_add_overflow(a, b, &r)) throw std::overflow_error("rational overflow");
-  return r;
-}
-
-struct Rational {
-  Int num = 0;
-  Int den = 1;
-  Rational() = default;
-  Rational(long long n) : num(n) {}  // NOLINT: implicit on purpose, integers are rationals
-  static Rational of(Int n, Int d) {
-    if (d < 0) {
-      n = -n;
-      d = -d;
-    }
-    const Int g = gcd_int(n, d);
-    Rational r;
-    r.num = g > 1 ? n / g : n;
-    r.den = g > 1 ? d / g : d;
-    return r;
-  }
-  int sign() const { return num > 0 ? 1 : (num < 0 ? -1 : 0); }
-};
-
-Rational operator-(const Rational& a) { return Rational::of(-a.num, a.den); }
-Rational operator+(const Rational& a, const Rational& b) {
-  const Int g = gcd_int(a.den, b.den);
-  return Rational::of(add_checked(mul_checked(a.num, b.den / g), mul_checked(b.num, a.den / g)),
-                      mul_checked(a.den / g, b.den));
-}
-Rational operator-(const Rational& a, const Rational& b) { return a + (-b); }
-Rational operator*(const Rational& a, const Rational& b) {
-  const Int g1 = std::max<Int>(1, gcd_int(a.num, b.den));
-  const Int g2 = std::max<Int>(1, gcd_int(b.num, a.den));
-  return Rational::of(mul_checked(a.num / g1, b.num / g2), mul_checked(a.den / g2, b.den / g1));
-}
-Rational operator/(const Rational& a, const Rational& b) { return a * Rational::of(b.den, b.num); }
-bool operator==(const Rational& a, const Rational& b) { return a.num == b.num && a.den == b.den; }
-bool operator<(const Rational& a, const Rational& b) { return (a - b).sign() < 0; }
-
-Rational exact(double x) {
-  for (int k = 0; k <= 40; ++k) {
-    const double s = std::ldexp(x, k);
-    if (s == std::floor(s) && std::abs(s) < 9e15) return Rational::of(static_cast<long long>(s), Int(1) << k);
-  }
-  throw std::invalid_argument("not a short dyadic: " + std::to_string(x));
-}
-
-using RPoint = std::array<Rational, 3>;
-RPoint exact(const Vec3& v) { return {exact(v.x()), exact(v.y()), exact(v.z())}; }
-
-// Is {x >= 0 : A x = b} non-empty? Phase 1 of the simplex method with Bland's rule (no cycling).
-bool lp_feasible(const std::vector<std::vector<Rational>>& a, const std::vector<Rational>& b) {
-  const std::size_t m = a.size();
-  const std::size_t n = a[0].size();
-  const std::size_t cols = n + m;
-  std::vector<std::vector<Rational>> t(m, std::vector<Rational>(cols));
-  std::vector<Rational> rhs(m);
-  std::vector<std::size_t> basis(m);
-  for (std::size_t i = 0; i < m; ++i) {
-    const Rational flip = b[i].sign() < 0 ? Rational(-1) : Rational(1);
-    for (std::size_t j = 0; j < n; ++j) t[i][j] = a[i][j] * flip;
-    t[i][n + i] = 1;
-    rhs[i] = b[i] * flip;
-    basis[i] = n + i;
-  }
-  std::vector<Rational> cost(cols);
-  Rational value;
-  for (std::size_t i = 0; i < m; ++i) {
-    for (std::size_t j = 0; j < n; ++j) cost[j] = cost[j] - t[i][j];
-    value = value - rhs[i];
-  }
-  for (;;) {
-    std::size_t enter = cols;
-    for (std::size_t j = 0; j < cols && enter == cols; ++j) {
-      if (cost[j].sign() < 0) enter = j;
-    }
-    if (enter == cols) break;
-    std::size_t leave = m;
-    Rational best;
-    for (std::size_t i = 0; i < m; ++i) {
-      if (t[i][enter].sign() <= 0) continue;
-      const Rational ratio = rhs[i] / t[i][enter];
-      if (leave == m || ratio < best || (ratio == best && basis[i] < basis[leave])) {
-        leave = i;
-        best = ratio;
-      }
-    }
-    if (leave == m) break;
-    const Rational pivot = t[leave][enter];
-    for (std::size_t j = 0; j < cols; ++j) t[leave][j] = t[leave][j] / pivot;
-    rhs[leave] = rhs[leave] / pivot;
-    for (std::size_t i = 0; i < m; ++i) {
-      const Rational f = t[i][enter];
-      if (i == leave || f.sign() == 0) continue;
-      for (std::size_t j = 0; j < cols; ++j) t[i][j] = t[i][j] - f * t[leave][j];
-      rhs[i] = rhs[i] - f * rhs[leave];
-    }
-    const Rational f = cost[enter];
-    for (std::size_t j = 0; j < cols; ++j) cost[j] = cost[j] - f * t[leave][j];
-    value = value - f * rhs[leave];
-    basis[leave] = enter;
-  }
-  return value.sign() == 0;
-}
-
-// Exact: do the convex hulls of two finite point sets intersect?
-bool hulls_intersect(const std::vector<RPoint>& p, const std::vector<RPoint>& q) {
-  const std::size_t n = p.size() + q.size();
-  std::vector<std::vector<Rational>> a(5, std::vector<Rational>(n));
-  std::vector<Rational> b(5);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (int k = 0; k < 3; ++k) a[k][i] = p[i][k];
-    a[3][i] = 1;
-  }
-  for (std::size_t j = 0; j < q.size(); ++j) {
-    for (int k = 0; k < 3; ++k) a[k][p.size() + j] = -q[j][k];
-    a[4][p.size() + j] = 1;
-  }
-  b[3] = 1;
-  b[4] = 1;
-  return lp_feasible(a, b);
-}
 
 // The Minkowski sum with the cube [-tau, tau]^3 (as the hull of the sums of corners).
 std::vector<RPoint> grown(const std::vector<RPoint>& p, const Rational& tau) {
