@@ -52,16 +52,13 @@ bool valid_ray(const Ray& ray) {
          ray.t_min <= ray.t_max;
 }
 
-}  // namespace
-
-template <class Volume>
-std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
-  StatsSink sink(stats);
-  if (tree.empty() || !valid_ray(ray)) return std::nullopt;
-  const TriangleMesh& mesh = tree.mesh();
+// Front-to-back walk of the nodes the ray meets within [ray.t_min, t_max]; `leaf(facet, t_max)`
+// returns the new t_max, which prunes every node entered farther than it.
+template <class Volume, class Leaf>
+void ordered_ray_walk(const Tree<Volume>& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
+  if (tree.empty() || !valid_ray(ray)) return;
   const RayPrecomputed pre(ray);
-  std::optional<RayHit> best;
-  Real best_t = ray.t_max;
+  Real t_max = ray.t_max;
   struct Entry {
     NodeIndex node;
     Real t_enter;
@@ -69,33 +66,24 @@ std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, 
   Entry stack[kStackSize];
   int top = 0;
   Real t_enter = 0;
-  ++sink.local.volume_tests;
-  if (!intersect_ray(tree.volume(tree.root()), pre, ray.t_min, best_t, &t_enter)) return std::nullopt;
+  ++stats.volume_tests;
+  if (!intersect_ray(tree.volume(tree.root()), pre, ray.t_min, t_max, &t_enter)) return;
   stack[top++] = {tree.root(), t_enter};
   while (top > 0) {
     const Entry entry = stack[--top];
-    if (entry.t_enter > best_t) continue;  // a closer hit was found since this node was pushed
+    if (entry.t_enter > t_max) continue;  // a closer hit was found since this node was pushed
     const NodeIndex node = entry.node;
-    ++sink.local.nodes_visited;
+    ++stats.nodes_visited;
     if (tree.is_leaf(node)) {
-      const FacetId f = tree.facet(node);
-      ++sink.local.leaf_tests;
-      TriangleHit hit;
-      Ray clipped = ray;
-      clipped.t_max = best_t;
-      if (intersect_ray_triangle(clipped, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
-        if (!best || hit.t < best_t || (hit.t == best_t && f < best->facet)) {
-          best = RayHit{f, hit.t, hit.u, hit.v};
-          best_t = hit.t;
-        }
-      }
+      t_max = std::min(t_max, leaf(tree.facet(node), t_max));
+      if (!(t_max >= ray.t_min)) return;
       continue;
     }
     const NodeIndex child = tree.first_child(node);
     Real t0 = 0, t1 = 0;
-    sink.local.volume_tests += 2;
-    const bool hit0 = intersect_ray(tree.volume(child), pre, ray.t_min, best_t, &t0);
-    const bool hit1 = intersect_ray(tree.volume(child + 1), pre, ray.t_min, best_t, &t1);
+    stats.volume_tests += 2;
+    const bool hit0 = intersect_ray(tree.volume(child), pre, ray.t_min, t_max, &t0);
+    const bool hit1 = intersect_ray(tree.volume(child + 1), pre, ray.t_min, t_max, &t1);
     // Push the farther child first so the nearer one is explored first.
     if (hit0 && hit1) {
       if (t0 <= t1) {
@@ -111,7 +99,42 @@ std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, 
       stack[top++] = {child + 1, t1};
     }
   }
+}
+
+}  // namespace
+
+template <class Volume>
+std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+  StatsSink sink(stats);
+  const TriangleMesh* mesh = tree.empty() ? nullptr : &tree.mesh();
+  std::optional<RayHit> best;
+  ordered_ray_walk(
+      tree, ray,
+      [&](FacetId f, Real t_max) {
+        ++sink.local.leaf_tests;
+        TriangleHit hit;
+        Ray clipped = ray;
+        clipped.t_max = t_max;
+        if (intersect_ray_triangle(clipped, mesh->corner(f, 0), mesh->corner(f, 1), mesh->corner(f, 2), hit)) {
+          if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
+        }
+        return best ? best->t : t_max;
+      },
+      sink.local);
   return best;
+}
+
+template <class Volume>
+void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats) {
+  StatsSink sink(stats);
+  ordered_ray_walk(
+      tree, ray,
+      [&](FacetId f, Real t_max) {
+        ++sink.local.leaf_tests;
+        return visit(f, t_max);
+      },
+      sink.local);
 }
 
 template <class Volume>
@@ -231,6 +254,7 @@ std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QuerySta
 
 #define BOXTREE_INSTANTIATE_QUERIES(V)                                                                            \
   template std::optional<RayHit> ray_closest_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                     \
+  template void ray_candidates<V>(const Tree<V>&, const Ray&, FunctionRef<Real(FacetId, Real)>, QueryStats*);       \
   template std::optional<RayHit> ray_any_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                         \
   template void ray_all_hits<V>(const Tree<V>&, const Ray&, FunctionRef<bool(const RayHit&)>, QueryStats*);       \
   template std::vector<RayHit> ray_all_hits<V>(const Tree<V>&, const Ray&, QueryStats*);                          \

@@ -37,6 +37,15 @@ struct RayHit {
 template <class Volume>
 std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats = nullptr);
 
+// The engines' ray path: the leaves whose volume the ray meets within [t_min, t_max], nearest
+// volume entry first, with no triangle test. `visit(facet, t_max)` gets the current t_max and
+// returns the new one (e.g. the closest hit so far, so that farther nodes are skipped; anything
+// below ray.t_min stops the walk). Lets an engine run its own exact ray/triangle code and keep
+// its own results (Bullet's btTriangleRaycastCallback) while the tree prunes by distance.
+template <class Volume>
+void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats = nullptr);
+
 // Some hit in range (the first found: cheapest for shadow/visibility rays).
 template <class Volume>
 std::optional<RayHit> ray_any_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats = nullptr);

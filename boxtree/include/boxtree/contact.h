@@ -1,0 +1,91 @@
+#pragma once
+// Per-facet narrowphase: contact points between one triangle and a convex shape, and between two
+// triangles. The boxtree queries (query.h, collide.h) find the candidate facets; these routines
+// turn a candidate into contacts. They are engine-agnostic: the Bullet and ODE adapters
+// (engine/) only convert conventions.
+//
+// Conventions, for every routine here:
+//  - `normal` is unit length and points from the triangle towards the shape (for two triangles:
+//    from triangle b towards triangle a): translating the shape by depth * normal separates them.
+//  - `depth` > 0 is penetration; depth <= 0 means the two are apart by -depth (reported only when
+//    -depth <= options.margin, so engines can keep speculative contacts).
+//  - `position` is on the triangle (for two triangles: on triangle b), in the same frame as the
+//    inputs; the matching deepest point of the shape is point_on_shape().
+//  - Triangles may be degenerate (zero area): the routines then treat them as a segment or a
+//    point, and never divide by zero or return NaN.
+#include <cstddef>
+#include <vector>
+
+#include "boxtree/detail/function_ref.h"
+#include "boxtree/shapes.h"
+
+namespace boxtree {
+
+struct ContactPoint {
+  Vec3 position = Vec3::Zero();  // on the triangle (triangle b for triangle pairs)
+  Vec3 normal = Vec3::UnitZ();   // unit, from the triangle towards the shape
+  Real depth = 0;                // > 0: penetration; <= 0: separation within the margin
+  FacetId facet = 0;             // not set by the routines; callers record which facet it was
+  FacetId other_facet = 0;       // mesh-vs-mesh: the facet of the other mesh (triangle a)
+
+  // The deepest point of the shape: position - normal * depth.
+  Vec3 point_on_shape() const { return position - normal * depth; }
+};
+
+struct ContactOptions {
+  // Report pairs closer than this (depth >= -margin) as well as penetrating ones.
+  Real margin = 0;
+  // false: the triangle is one-sided (a terrain, a closed surface seen from outside): a shape
+  // whose centre is behind the triangle's plane (counter-clockwise winding is the front) is
+  // pushed out through the front face, never further in. true: whichever side the shape's
+  // centre is on.
+  bool two_sided = true;
+};
+
+// Upper bounds on what one call writes (size the output arrays with these).
+constexpr int kMaxSphereTriangleContacts = 1;
+constexpr int kMaxCapsuleTriangleContacts = 2;
+constexpr int kMaxBoxTriangleContacts = 8;
+constexpr int kMaxConvexTriangleContacts = 1;
+constexpr int kMaxTriangleTriangleContacts = 4;
+
+// Each returns how many contacts it wrote into `out` (0: apart by more than the margin).
+int contact_sphere_triangle(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c,
+                            const ContactOptions& options, ContactPoint* out);
+// Up to two: a capsule lying flat on a face touches along a segment, and both ends are reported.
+int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
+                             const ContactOptions& options, ContactPoint* out);
+// Separating axes (3 box faces, the triangle's normal, 9 edge crosses); the axis of least
+// penetration gives the normal, and the contact points come from clipping the box's face
+// against the triangle (face cases) or from the closest points of the two edges (edge cases).
+int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c,
+                         const ContactOptions& options, ContactPoint* out);
+
+// A convex shape given by its support mapping: the point of the shape farthest along `direction`
+// (direction is not normalized). `center` is any interior point (used to start the search and to
+// pick the side for two-sided triangles).
+struct ConvexSupport {
+  FunctionRef<Vec3(const Vec3& direction)> support;
+  Vec3 center = Vec3::Zero();
+};
+// General convex shapes (cylinders, convex hulls) by GJK + EPA/MPR (libccd). One contact: the
+// deepest point, with the penetration normal.
+int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec3& b, const Vec3& c,
+                            const ContactOptions& options, ContactPoint* out);
+
+// Support mappings of the shapes engines hand us, for contact_convex_triangle.
+Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& direction);  // axis p0-p1
+Vec3 support_points(const std::vector<Vec3>& points, const Vec3& direction);              // convex hull of points
+
+// Two triangles (mesh vs mesh): contacts when they intersect or are within the margin. The normal
+// points from triangle b towards triangle a; positions are on triangle b.
+int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                              const Vec3& b2, const ContactOptions& options, ContactPoint* out);
+
+// Reduces a contact set the way a stable trimesh collider does: merges near-duplicates (positions
+// closer than `merge_distance` with normals within ~10 degrees: keeps the deeper one), then, if
+// more than `max_count` remain, keeps the deepest and then greedily the points that spread the
+// set the most (largest area). Order of the result: deepest first. max_count >= 1.
+void reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance);
+
+}  // namespace boxtree

@@ -1,0 +1,72 @@
+#include "boxtree/any_tree.h"
+
+#include <typeinfo>
+
+#include "boxtree/detail/volume_kinds.h"
+
+namespace boxtree {
+
+AnyTree AnyTree::build(std::shared_ptr<const TriangleMesh> mesh, const Method& method, const BuildSettings& settings,
+                       BuildStats* stats) {
+  return with_method(method, [&](auto tag) {
+    using V = typename decltype(tag)::type;
+    return AnyTree(build_tree<V>(std::move(mesh), settings_for(method, settings), stats), method);
+  });
+}
+
+namespace {
+const AnyTree::Concept& checked(const std::shared_ptr<const AnyTree::Concept>& impl) {
+  if (!impl) throw Error("boxtree::AnyTree: the tree is empty (default-constructed)");
+  return *impl;
+}
+}  // namespace
+
+const TriangleMesh& AnyTree::mesh() const { return checked(impl_).mesh(); }
+const std::shared_ptr<const TriangleMesh>& AnyTree::shared_mesh() const { return checked(impl_).shared_mesh(); }
+std::size_t AnyTree::facet_count() const { return impl_ ? impl_->mesh().facet_count() : 0; }
+std::size_t AnyTree::node_count() const { return impl_ ? impl_->node_count() : 0; }
+int AnyTree::height() const { return impl_ ? impl_->height() : 0; }
+std::size_t AnyTree::memory_bytes() const { return impl_ ? impl_->memory_bytes() : 0; }
+
+Aabb AnyTree::bounds() const {
+  const TriangleMesh& m = mesh();
+  Aabb box = Aabb::empty();
+  for (const Triangle& t : m.triangles)
+    for (VertexId v : t) box.expand(m.vertices[v]);
+  return box;
+}
+
+std::optional<RayHit> AnyTree::ray_closest_hit(const Ray& ray, QueryStats* stats) const {
+  return impl_ ? impl_->ray_closest_hit(ray, stats) : std::nullopt;
+}
+void AnyTree::ray_candidates(const Ray& ray, FunctionRef<Real(FacetId, Real)> visit, QueryStats* stats) const {
+  if (impl_) impl_->ray_candidates(ray, visit, stats);
+}
+void AnyTree::query_overlap(const Aabb& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                            FacetTest test) const {
+  if (impl_) impl_->query_overlap(shape, visit, stats, test);
+}
+void AnyTree::query_overlap(const Obb& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                            FacetTest test) const {
+  if (impl_) impl_->query_overlap(shape, visit, stats, test);
+}
+void AnyTree::query_overlap(const Sphere& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                            FacetTest test) const {
+  if (impl_) impl_->query_overlap(shape, visit, stats, test);
+}
+void AnyTree::query_overlap(const Capsule& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                            FacetTest test) const {
+  if (impl_) impl_->query_overlap(shape, visit, stats, test);
+}
+
+void AnyTree::collide(const AnyTree& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> visit,
+                      QueryStats* stats, const CollideSettings& settings) const {
+  if (!impl_ || !b.impl_) return;
+  if (typeid(*impl_) != typeid(*b.impl_)) {
+    throw Error("boxtree::AnyTree::collide: the trees use different methods (" + method_name(method_) + " and " +
+                method_name(b.method_) + "); build both with the same method");
+  }
+  impl_->collide(*b.impl_, a_from_b, visit, stats, settings);
+}
+
+}  // namespace boxtree
