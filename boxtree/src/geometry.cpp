@@ -651,4 +651,25 @@ bool overlaps(const Aabb& box, const Plane& plane) {
   return lo <= plane.offset && plane.offset <= hi;
 }
 
+Obb swept_box(const Vec3& from, const Vec3& to, const Vec3& half) {
+  const Vec3 motion = to - from;
+  const Real length = motion.norm();
+  Obb box;
+  box.center = (from + to) / 2;
+  if (!(length > 0)) {
+    box.half_extents = half;
+    return box;
+  }
+  const Vec3 axis = motion / length;
+  Vec3 b1, b2;
+  detail::orthonormal_completion(axis, b1, b2);
+  box.axes.col(0) = axis;
+  box.axes.col(1) = b1;
+  box.axes.col(2) = b2;
+  // The box's extent along a unit direction u is |u| . half (support of an axis-aligned box).
+  for (int i = 0; i < 3; ++i) box.half_extents[i] = box.axes.col(i).cwiseAbs().dot(half);
+  box.half_extents[0] += length / 2;
+  return box;
+}
+
 }  // namespace boxtree

@@ -39,6 +39,12 @@ struct ContactOptions {
   // whose centre is behind the triangle's plane (counter-clockwise winding is the front) is
   // pushed out through the front face, never further in. true: whichever side the shape's
   // centre is on.
+  // Details of one-sided (implementation notes): the front normal is (b-a)x(c-a) normalized. A
+  // shape whose centre is behind, or whose two-sided normal would point behind, gets the front
+  // normal and the *directional* depth along it (the least lift along the front normal that
+  // clears the triangle), and only if it really overlaps: such a shape that is apart is not
+  // reported even within the margin. Every one-sided normal has normal . front >= -1e-9.
+  // Degenerate triangles have no front and are treated as two-sided.
   bool two_sided = true;
 };
 
@@ -49,15 +55,22 @@ constexpr int kMaxBoxTriangleContacts = 8;
 constexpr int kMaxConvexTriangleContacts = 1;
 constexpr int kMaxTriangleTriangleContacts = 4;
 
-// Each returns how many contacts it wrote into `out` (0: apart by more than the margin).
+// Each returns how many contacts it wrote into `out` (0: apart by more than the margin). All the
+// contacts of one call share one normal, and the deepest comes first. Non-finite input gives 0.
 int contact_sphere_triangle(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c,
                             const ContactOptions& options, ContactPoint* out);
 // Up to two: a capsule lying flat on a face touches along a segment, and both ends are reported.
+// (When the normal is the face's, the two ends of the core's part over the triangle are reported,
+// each at its own depth along the normal, positions projected on the face; ends deeper than
+// -margin only. Otherwise one contact.)
 int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
                              const ContactOptions& options, ContactPoint* out);
 // Separating axes (3 box faces, the triangle's normal, 9 edge crosses); the axis of least
 // penetration gives the normal, and the contact points come from clipping the box's face
 // against the triangle (face cases) or from the closest points of the two edges (edge cases).
+// Face cases report a patch (each point at its own depth along the normal; the deepest one is the
+// penetration along that normal); edge-edge cases one point. Apart (within the margin): the exact
+// gap; a patch when the gap is along a face normal, else the closest pair.
 int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c,
                          const ContactOptions& options, ContactPoint* out);
 
@@ -70,6 +83,10 @@ struct ConvexSupport {
 };
 // General convex shapes (cylinders, convex hulls) by GJK + EPA/MPR (libccd). One contact: the
 // deepest point, with the penetration normal.
+// (GJK + EPA against the triangle rounded by the margin, then a local polish of the normal on the
+// exact projection overlap: moving the shape by depth along the normal always separates it; the
+// depth is the least penetration to ~1e-4 of the sizes on curved shapes, and EPA may rarely end
+// in another local minimum on deep configurations.)
 int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec3& b, const Vec3& c,
                             const ContactOptions& options, ContactPoint* out);
 
@@ -81,6 +98,19 @@ Vec3 support_points(const std::vector<Vec3>& points, const Vec3& direction);    
 // points from triangle b towards triangle a; positions are on triangle b.
 int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                               const Vec3& b2, const ContactOptions& options, ContactPoint* out);
+
+// Mesh vs mesh by face normals only (the clipping method of GImpact and other trimesh
+// colliders): a's triangle clipped to the prism over b's face gives points on b's front with
+// normal +n_b, and b's triangle clipped to the prism over a's face gives points with normal
+// -n_a; the side of a face more than twice the other's area is reported, else the side with the
+// shallower deepest point (the other side if one has no points). Normals are the faces'
+// counter-clockwise normals, so both meshes must be wound outward (closed meshes, terrains seen
+// from above). Unlike contact_triangle_triangle's edge-edge axes, face normals do not swing
+// between steps, which keeps resting meshes still. Up to kMaxTriangleFaceContacts points with
+// depth >= -margin; positions on triangle b; normals from b towards a.
+constexpr int kMaxTriangleFaceContacts = 6;
+int contact_triangle_faces(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                           const Vec3& b2, const ContactOptions& options, ContactPoint* out);
 
 // Reduces a contact set the way a stable trimesh collider does: merges near-duplicates (positions
 // closer than `merge_distance` with normals within ~10 degrees: keeps the deeper one), then, if

@@ -34,6 +34,11 @@ bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, cons
 // True if the triangle touches the plane or has corners on both sides of it.
 bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane);
 
+// An oriented box enclosing the axis-aligned box of half extents `half` swept from centre `from`
+// to centre `to`: its first axis is along the motion, so it is far tighter than the axis-aligned
+// box of the sweep for long diagonal motions (convex casts). `from == to` gives the box itself.
+Obb swept_box(const Vec3& from, const Vec3& to, const Vec3& half);
+
 // Closest point of the (possibly degenerate) triangle to p (Ericson, Real-Time Collision
 // Detection, 5.1.5).
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);

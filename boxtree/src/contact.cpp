@@ -1,0 +1,1229 @@
+// Per-facet narrowphase (contact.h): contact points between one triangle and a convex shape, and
+// between two triangles.
+//
+// How each routine finds its answer:
+//  * Sphere: the closest point of the triangle (exact).
+//  * Capsule: the closest pair of the core segment and the triangle while they are apart; once the
+//    core touches the triangle, the separating axes of a segment against a triangle (the faces of
+//    their Minkowski difference: the triangle's normal and the three edge x segment crosses), which
+//    give the exact penetration depth of the core, plus the radius.
+//  * Box and triangle pairs: one shared separating-axis routine over a small polytope description
+//    (polytope_triangle below): every face normal of the Minkowski difference (the shape's faces,
+//    the triangle's normal, edge x edge crosses) is tried, so the least overlap is the exact
+//    penetration depth when the shapes overlap and a lower bound of the distance when they are
+//    apart. Face axes are preferred unless an edge axis is clearly better (as the box colliders of
+//    ODE and Bullet do): face contacts come as a stable patch of points, edge contacts as one.
+//  * General convex shapes: GJK + EPA from libccd against the triangle rounded by the margin, then
+//    a local polish of the normal on the exact projection overlap (contact_convex_triangle).
+//
+// One-sided triangles (ContactOptions::two_sided == false) and the "push out through the front
+// face" rule: when the shape's centre is behind the plane of a non-degenerate triangle, or when
+// the two-sided answer's normal would point behind it (n . normal < -1e-9), the normal becomes
+// the front normal n = (b-a)x(c-a)/|.| and the depth the *directional* penetration along n: the
+// least t such that the shape moved by t*n no longer overlaps the triangle. Such a shape gets a
+// contact only if it really overlaps the triangle: a shape behind a one-sided triangle (or whose
+// nearest direction is behind it) and apart from it is not seen, not even within the margin. So
+// one-sided normals always satisfy n . normal >= -1e-9 and the shape is never pushed further in.
+// Degenerate triangles have no front and are always two-sided.
+//
+// Contact counts: the sphere, convex and edge-edge cases give one point; a capsule lying along
+// the face gives the two ends of its core over the triangle; box and triangle-pair face cases
+// give a patch, reduced to the kMax... bound by reduce_contacts' rule. All points of one call
+// share one normal, and the deepest point is first.
+#include "boxtree/contact.h"
+
+#include "boxtree/geometry.h"
+#include "internal.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+#include <ccd/ccd.h>
+
+namespace boxtree {
+namespace {
+
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+constexpr Real kEps = std::numeric_limits<Real>::epsilon();
+static_assert(std::is_same_v<ccd_real_t, Real>, "libccd must be built in double precision (CCD_DOUBLE)");
+
+// A triangle is degenerate (treated as the segment or point it nearly is) when it is narrower
+// than 1e-8 of its longest edge: the same threshold as closest_point_on_triangle, so that both
+// agree on what the triangle is.
+constexpr Real kDegenerateWidth = 1e-8;
+// Relative size below which a geometric quantity is taken as zero (a distance, an axis length).
+constexpr Real kTiny = 1e-10;
+// Face axes win unless an edge axis is better by this fraction of the face overlap: a box resting
+// on a face keeps a patch of contacts instead of flickering to a single edge contact.
+constexpr Real kFaceBias = 0.05;
+// Normals whose component along the front normal is below this count as pointing behind it.
+constexpr Real kBehind = 1e-9;
+
+Real max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
+bool finite(const Vec3& a, const Vec3& b, const Vec3& c) { return a.allFinite() && b.allFinite() && c.allFinite(); }
+
+// Corners, the unit front normal and sizes of a triangle.
+struct TriangleFrame {
+  Vec3 v[3];
+  Vec3 normal = Vec3::Zero();  // unit (b-a)x(c-a); zero when degenerate
+  bool degenerate = true;
+  Real size = 0;   // longest edge
+  Real coord = 0;  // largest coordinate magnitude (for rounding tolerances)
+
+  TriangleFrame(const Vec3& a, const Vec3& b, const Vec3& c) : v{a, b, c} {
+    const Vec3 n = (b - a).cross(c - a);
+    const Real longest_squared = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    size = std::sqrt(longest_squared);
+    coord = std::max({max_abs(a), max_abs(b), max_abs(c)});
+    const Real normal_squared = n.squaredNorm();
+    degenerate = !(normal_squared > kDegenerateWidth * kDegenerateWidth * longest_squared * longest_squared);
+    if (!degenerate) normal = n / std::sqrt(normal_squared);
+  }
+  Real signed_distance(const Vec3& p) const { return normal.dot(p - v[0]); }
+  bool one_sided(const ContactOptions& options) const { return !options.two_sided && !degenerate; }
+};
+
+// Tolerance for "zero" distances and positions: a tiny fraction of the sizes involved plus the
+// rounding of coordinates of magnitude `coord`.
+Real tolerance(Real size, Real coord) { return kTiny * size + 64 * kEps * coord; }
+
+// The two corners of a degenerate triangle that are farthest apart: the segment it is.
+std::pair<Vec3, Vec3> extent_of(const TriangleFrame& tri) {
+  const Real ab = (tri.v[1] - tri.v[0]).squaredNorm();
+  const Real bc = (tri.v[2] - tri.v[1]).squaredNorm();
+  const Real ca = (tri.v[0] - tri.v[2]).squaredNorm();
+  if (ab >= bc && ab >= ca) return {tri.v[0], tri.v[1]};
+  if (bc >= ca) return {tri.v[1], tri.v[2]};
+  return {tri.v[2], tri.v[0]};
+}
+
+// Some unit vector perpendicular to `d` (UnitZ if d is zero): the normal used when the geometry
+// leaves it undetermined (a shape's core exactly on a degenerate triangle).
+Vec3 perpendicular_to(const Vec3& d) {
+  const Real len = d.norm();
+  if (!(len > 0)) return Vec3::UnitZ();
+  Vec3 b1;
+  Vec3 b2;
+  detail::orthonormal_completion(d / len, b1, b2);
+  return b1;
+}
+
+// Closest points of the segments [p0,p1] and [q0,q1] (Ericson, Real-Time Collision Detection,
+// 5.1.9), with the unclamped parameter from the cross product as in geometry.cpp (stable for
+// nearly parallel segments) and exact zero tests for zero-length segments.
+void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
+                                Vec3& on_q) {
+  const Vec3 d1 = p1 - p0;
+  const Vec3 d2 = q1 - q0;
+  const Vec3 r = p0 - q0;
+  const Real a = d1.squaredNorm();
+  const Real e = d2.squaredNorm();
+  const Real f = d2.dot(r);
+  Real s = 0;
+  Real t = 0;
+  if (a == 0 && e == 0) {
+    // both points
+  } else if (a == 0) {
+    t = std::clamp(f / e, Real(0), Real(1));
+  } else {
+    const Real c = d1.dot(r);
+    if (e == 0) {
+      s = std::clamp(-c / a, Real(0), Real(1));
+    } else {
+      const Real b = d1.dot(d2);
+      const Vec3 n = d1.cross(d2);
+      const Real denom = n.squaredNorm();
+      s = denom > 0 ? std::clamp((-r).cross(d2).dot(n) / denom, Real(0), Real(1)) : Real(0);
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / a, Real(0), Real(1));
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((b - c) / a, Real(0), Real(1));
+      }
+    }
+  }
+  on_p = p0 + s * d1;
+  on_q = q0 + t * d2;
+}
+
+// Closest pair of the segment [p0,p1] and the triangle. The pair has a segment end on one side or
+// a triangle edge on the other unless the segment crosses the triangle, so the candidates are the
+// two ends, the three edges and the crossing point of the plane.
+struct SegmentTrianglePair {
+  Vec3 on_segment = Vec3::Zero();
+  Vec3 on_triangle = Vec3::Zero();
+  Real distance_squared = kInf;
+};
+
+SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, const TriangleFrame& tri) {
+  SegmentTrianglePair best;
+  const auto consider = [&](const Vec3& x, const Vec3& y) {
+    const Real d2 = (x - y).squaredNorm();
+    if (d2 < best.distance_squared) best = {x, y, d2};
+  };
+  const Vec3& a = tri.v[0];
+  const Vec3& b = tri.v[1];
+  const Vec3& c = tri.v[2];
+  if (!tri.degenerate) {
+    const Real s0 = tri.signed_distance(p0);
+    const Real s1 = tri.signed_distance(p1);
+    if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
+      const Vec3 x = p0 + (s0 / (s0 - s1)) * (p1 - p0);
+      consider(x, closest_point_on_triangle(x, a, b, c));
+    }
+  }
+  consider(p0, closest_point_on_triangle(p0, a, b, c));
+  consider(p1, closest_point_on_triangle(p1, a, b, c));
+  for (int i = 0; i < 3; ++i) {
+    Vec3 x;
+    Vec3 y;
+    closest_points_of_segments(p0, p1, tri.v[i], tri.v[(i + 1) % 3], x, y);
+    consider(x, y);
+  }
+  return best;
+}
+
+// Inward normals of the triangle's side walls (the prism over it along its normal):
+// wall(i) . (x - v[i]) >= 0 for points over the triangle.
+Vec3 inward_wall(const TriangleFrame& tri, int i) {
+  return tri.normal.cross(tri.v[(i + 1) % 3] - tri.v[i]);
+}
+
+// The parameter range [t0, t1] of the segment p0 + t*(p1-p0), t in [0,1], over the triangle
+// (inside its prism). False if empty.
+bool clip_segment_to_prism(const Vec3& p0, const Vec3& p1, const TriangleFrame& tri, Real& t0, Real& t1) {
+  t0 = 0;
+  t1 = 1;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 m = inward_wall(tri, i);
+    const Real f0 = m.dot(p0 - tri.v[i]);
+    const Real f1 = m.dot(p1 - tri.v[i]);
+    if (f0 < 0 && f1 < 0) return false;
+    if (f0 < 0) t0 = std::max(t0, f0 / (f0 - f1));
+    if (f1 < 0) t1 = std::min(t1, f0 / (f0 - f1));
+  }
+  return t0 <= t1;
+}
+
+ContactPoint make_contact(const Vec3& position, const Vec3& normal, Real depth) {
+  ContactPoint contact;
+  contact.position = position;
+  contact.normal = normal;
+  contact.depth = depth;
+  return contact;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact reduction
+
+// Twice the area of the 2D convex hull of the points (monotone chain; n <= a few dozen).
+Real hull_area_2d(std::array<std::pair<Real, Real>, 64>& p, int n) {
+  if (n < 3) return 0;
+  std::sort(p.begin(), p.begin() + n);
+  std::array<std::pair<Real, Real>, 130> hull;
+  int k = 0;
+  const auto cross = [](const std::pair<Real, Real>& o, const std::pair<Real, Real>& a,
+                        const std::pair<Real, Real>& b) {
+    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+  };
+  for (int i = 0; i < n; ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (int i = n - 2, lower = k + 1; i >= 0; --i) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  Real area = 0;
+  for (int i = 0; i + 1 < k; ++i) area += hull[i].first * hull[i + 1].second - hull[i + 1].first * hull[i].second;
+  return std::abs(area);
+}
+
+// reduce_contacts on an array; returns the new count.
+int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance) {
+  if (count <= 0) return 0;
+  std::sort(contacts, contacts + count,
+            [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+  // Near-duplicates: same place and normals within ~10 degrees; the deeper one (earlier) stays.
+  const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
+  const Real merge_squared = merge_distance * merge_distance;
+  int kept = 0;
+  for (int i = 0; i < count; ++i) {
+    bool duplicate = false;
+    for (int j = 0; j < kept && !duplicate; ++j) {
+      duplicate = (contacts[i].position - contacts[j].position).squaredNorm() <= merge_squared &&
+                  contacts[i].normal.dot(contacts[j].normal) >= cos_merge;
+    }
+    if (!duplicate) contacts[kept++] = contacts[i];
+  }
+  if (kept <= max_count) return kept;
+
+  // Keep the deepest, then greedily the point that makes the largest hull (in the plane across
+  // the deepest contact's normal), ties (collinear sets) broken by the distance to the chosen set.
+  Vec3 u;
+  Vec3 w;
+  detail::orthonormal_completion(contacts[0].normal.normalized(), u, w);
+  const int n = std::min(kept, 64);
+  std::array<bool, 64> chosen{};
+  std::array<int, 64> order{};
+  chosen[0] = true;
+  order[0] = 0;
+  int selected = 1;
+  std::array<std::pair<Real, Real>, 64> scratch;
+  while (selected < max_count) {
+    int best = -1;
+    Real best_area = -1;
+    Real best_distance = -1;
+    for (int i = 0; i < n; ++i) {
+      if (chosen[i]) continue;
+      int m = 0;
+      for (int s = 0; s < selected; ++s) {
+        const Vec3& p = contacts[order[s]].position;
+        scratch[m++] = {p.dot(u), p.dot(w)};
+      }
+      scratch[m++] = {contacts[i].position.dot(u), contacts[i].position.dot(w)};
+      const Real area = hull_area_2d(scratch, m);
+      Real distance = kInf;
+      for (int s = 0; s < selected; ++s) {
+        distance = std::min(distance, (contacts[i].position - contacts[order[s]].position).squaredNorm());
+      }
+      // Areas compare with a relative slack so that rounding does not beat a real spread.
+      const bool better = area > best_area * (1 + 1e-9) ||
+                          (area >= best_area * (1 - 1e-9) && distance > best_distance);
+      if (better) {
+        best = i;
+        best_area = area;
+        best_distance = distance;
+      }
+    }
+    if (best < 0) break;
+    chosen[best] = true;
+    order[selected++] = best;
+  }
+  std::array<ContactPoint, 64> result;
+  for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];
+  std::sort(result.begin(), result.begin() + selected,
+            [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+  std::copy(result.begin(), result.begin() + selected, contacts);
+  return selected;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Polytope vs triangle (boxes, and triangle a of a triangle pair)
+
+// The half-space {x : normal . x <= offset}.
+struct HalfSpace {
+  Vec3 normal = Vec3::Zero();
+  Real offset = 0;
+  Real eval(const Vec3& x) const { return normal.dot(x) - offset; }
+};
+
+struct PolytopeFace {
+  Vec3 outward = Vec3::Zero();  // unit
+  Real offset = 0;              // outward . x on the face
+  int side_count = 0;
+  HalfSpace sides[4];  // the face's polygon is the face plane cut by these
+};
+
+// A convex polytope given by what the separating-axis test and the clipping need.
+struct Polytope {
+  int vertex_count = 0;
+  Vec3 vertices[8];
+  int edge_count = 0;
+  int edge_from[12] = {};
+  int edge_to[12] = {};
+  int edge_direction[12] = {};
+  int direction_count = 0;
+  Vec3 directions[3];  // unit edge directions, one per parallel class
+  int face_count = 0;
+  PolytopeFace faces[6];
+  int bound_count = 0;
+  HalfSpace bounds[6];  // the polytope is the intersection of these
+  Vec3 center = Vec3::Zero();
+  Real size = 0;
+  Real coord = 0;
+  // For closest points: a box (axes, half extents) or else the triangle of the first 3 vertices.
+  bool is_box = false;
+  Mat3 axes = Mat3::Identity();
+  Vec3 half_extents = Vec3::Zero();
+
+  Vec3 closest_point(const Vec3& p) const {
+    if (!is_box) return closest_point_on_triangle(p, vertices[0], vertices[1], vertices[2]);
+    const Vec3 local = axes.transpose() * (p - center);
+    return center + axes * local.cwiseMax(-half_extents).cwiseMin(half_extents);
+  }
+};
+
+Polytope polytope_of_box(const Obb& box) {
+  Polytope p;
+  const Vec3& c = box.center;
+  const Vec3 h = box.half_extents.cwiseAbs();
+  p.center = c;
+  p.vertex_count = 8;
+  for (int i = 0; i < 8; ++i) {
+    Vec3 x = c;
+    for (int k = 0; k < 3; ++k) x += ((i >> k) & 1 ? h[k] : -h[k]) * box.axes.col(k);
+    p.vertices[i] = x;
+  }
+  p.direction_count = 3;
+  for (int k = 0; k < 3; ++k) {
+    p.directions[k] = box.axes.col(k);
+    for (int i = 0; i < 8; ++i) {
+      if ((i >> k) & 1) continue;
+      p.edge_from[p.edge_count] = i;
+      p.edge_to[p.edge_count] = i | (1 << k);
+      p.edge_direction[p.edge_count] = k;
+      ++p.edge_count;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    for (const Real sign : {Real(1), Real(-1)}) {
+      const Vec3 n = sign * box.axes.col(k);
+      PolytopeFace& face = p.faces[p.face_count++];
+      face.outward = n;
+      face.offset = n.dot(c) + h[k];
+      p.bounds[p.bound_count++] = {n, face.offset};
+      for (int j = 0; j < 3; ++j) {
+        if (j == k) continue;
+        const Vec3 m = box.axes.col(j);
+        face.sides[face.side_count++] = {m, m.dot(c) + h[j]};
+        face.sides[face.side_count++] = {-m, -m.dot(c) + h[j]};
+      }
+    }
+  }
+  p.size = 2 * h.norm();
+  p.coord = max_abs(c) + h.sum();
+  p.is_box = true;
+  p.axes = box.axes;
+  p.half_extents = h;
+  return p;
+}
+
+Polytope polytope_of_triangle(const TriangleFrame& tri) {
+  Polytope p;
+  p.vertex_count = 3;
+  for (int i = 0; i < 3; ++i) p.vertices[i] = tri.v[i];
+  p.center = (tri.v[0] + tri.v[1] + tri.v[2]) / 3;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 e = tri.v[(i + 1) % 3] - tri.v[i];
+    const Real len = e.norm();
+    if (!(len > kTiny * tri.size)) continue;
+    p.directions[p.direction_count] = e / len;
+    p.edge_from[p.edge_count] = i;
+    p.edge_to[p.edge_count] = (i + 1) % 3;
+    p.edge_direction[p.edge_count] = p.direction_count;
+    ++p.edge_count;
+    ++p.direction_count;
+  }
+  if (!tri.degenerate) {
+    HalfSpace sides[3];
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 m = inward_wall(tri, i).normalized();
+      sides[i] = {-m, -m.dot(tri.v[i])};
+    }
+    for (const Real sign : {Real(1), Real(-1)}) {
+      PolytopeFace& face = p.faces[p.face_count++];
+      face.outward = sign * tri.normal;
+      face.offset = face.outward.dot(tri.v[0]);
+      face.side_count = 3;
+      for (int i = 0; i < 3; ++i) face.sides[i] = sides[i];
+      p.bounds[p.bound_count++] = {face.outward, face.offset};
+    }
+    for (int i = 0; i < 3; ++i) p.bounds[p.bound_count++] = sides[i];
+  }
+  p.size = tri.size;
+  p.coord = tri.coord;
+  return p;
+}
+
+struct Interval {
+  Real lo = kInf;
+  Real hi = -kInf;
+};
+
+Interval project(const Polytope& p, const Vec3& u) {
+  Interval r;
+  for (int i = 0; i < p.vertex_count; ++i) {
+    const Real x = u.dot(p.vertices[i]);
+    r.lo = std::min(r.lo, x);
+    r.hi = std::max(r.hi, x);
+  }
+  return r;
+}
+
+Interval project(const TriangleFrame& tri, const Vec3& u) {
+  const Real x0 = u.dot(tri.v[0]);
+  const Real x1 = u.dot(tri.v[1]);
+  const Real x2 = u.dot(tri.v[2]);
+  return {std::min({x0, x1, x2}), std::max({x0, x1, x2})};
+}
+
+enum class AxisKind { kTriangleFace, kShapeFace, kEdges };
+
+// A candidate normal N (from the triangle towards the shape) and the overlap along it: how far the
+// shape must move along N for its projection to clear the triangle's.
+struct Axis {
+  Vec3 normal = Vec3::UnitZ();
+  Real overlap = kInf;
+  AxisKind kind = AxisKind::kTriangleFace;
+  int shape_index = 0;     // face index, or edge direction
+  int triangle_index = 0;  // triangle edge
+};
+
+// Sutherland-Hodgman: keeps the part of the convex polygon inside the half-space.
+int clip_polygon(const Vec3* in, int n, const HalfSpace& h, Vec3* out) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec3& cur = in[i];
+    const Vec3& next = in[(i + 1) % n];
+    const Real dc = h.eval(cur);
+    const Real dn = h.eval(next);
+    if (dc <= 0) out[m++] = cur;
+    if ((dc < 0 && dn > 0) || (dc > 0 && dn < 0)) out[m++] = cur + (dc / (dc - dn)) * (next - cur);
+  }
+  return m;
+}
+
+constexpr int kScratchContacts = 48;
+
+// Contacts for the triangle's face as the normal N = +-n: the points of the shape over the
+// triangle (inside its prism), at their distance below the plane along N. The deepest point of
+// the shape over the triangle is a vertex of shape-within-prism, which is a shape vertex inside
+// the prism, a shape edge crossing a prism wall, or a prism edge (the line through a triangle
+// corner along N) crossing the shape's boundary: all three kinds are generated, so the deepest
+// contact is exactly the directional penetration depth along N.
+int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
+                           ContactPoint* out) {
+  int count = 0;
+  const Real plane = normal.dot(tri.v[0]);
+  Vec3 walls[3];
+  for (int i = 0; i < 3; ++i) walls[i] = inward_wall(tri, i).normalized();
+  const auto inside_prism = [&](const Vec3& x, int skip) {
+    for (int i = 0; i < 3; ++i) {
+      if (i != skip && walls[i].dot(x - tri.v[i]) < -slack) return false;
+    }
+    return true;
+  };
+  const auto add = [&](const Vec3& x) {
+    if (count >= kScratchContacts) return;
+    const Real depth = plane - normal.dot(x);
+    out[count++] = make_contact(x + depth * normal, normal, depth);
+  };
+  for (int i = 0; i < shape.vertex_count; ++i) {
+    if (inside_prism(shape.vertices[i], -1)) add(shape.vertices[i]);
+  }
+  for (int e = 0; e < shape.edge_count; ++e) {
+    const Vec3& p = shape.vertices[shape.edge_from[e]];
+    const Vec3& q = shape.vertices[shape.edge_to[e]];
+    for (int i = 0; i < 3; ++i) {
+      const Real fp = walls[i].dot(p - tri.v[i]);
+      const Real fq = walls[i].dot(q - tri.v[i]);
+      if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
+      const Vec3 x = p + (fp / (fp - fq)) * (q - p);
+      if (inside_prism(x, i)) add(x);
+    }
+  }
+  // Lines v - t*N through the triangle's corners against the shape's bounding half-spaces
+  // (Cyrus-Beck): the largest t is the deepest point of the shape under that corner.
+  for (int j = 0; j < 3 && shape.bound_count > 0; ++j) {
+    Real t_lo = -kInf;
+    Real t_hi = kInf;
+    for (int k = 0; k < shape.bound_count; ++k) {
+      // bound.normal . (v - t N) <= offset  <=>  -t (bound.normal . N) <= offset - bound.normal . v
+      const Real rate = -shape.bounds[k].normal.dot(normal);
+      const Real room = -shape.bounds[k].eval(tri.v[j]);
+      if (std::abs(rate) <= kEps) {
+        if (room < -slack) t_hi = -kInf;
+        continue;
+      }
+      const Real t = room / rate;
+      if (rate > 0) {
+        t_hi = std::min(t_hi, t);
+      } else {
+        t_lo = std::max(t_lo, t);
+      }
+    }
+    if (t_lo <= t_hi + slack && std::isfinite(t_hi) && count < kScratchContacts) {
+      out[count++] = make_contact(tri.v[j], normal, t_hi);
+    }
+  }
+  return count;
+}
+
+// Contacts for a face of the shape (outward f, N = -f): the triangle clipped to the face's
+// polygon prism, each point at its depth below the face plane.
+int shape_face_contacts(const PolytopeFace& face, const TriangleFrame& tri, ContactPoint* out) {
+  Vec3 buffer_a[16] = {tri.v[0], tri.v[1], tri.v[2]};
+  Vec3 buffer_b[16];
+  Vec3* in = buffer_a;
+  Vec3* next = buffer_b;
+  int n = 3;
+  for (int s = 0; s < face.side_count && n > 0; ++s) {
+    n = clip_polygon(in, n, face.sides[s], next);
+    std::swap(in, next);
+  }
+  for (int i = 0; i < n; ++i) out[i] = make_contact(in[i], -face.outward, face.offset - face.outward.dot(in[i]));
+  return n;
+}
+
+// The closest points of the shape's supporting edge along direction k and the triangle's edge j.
+int edge_contacts(const Polytope& shape, const TriangleFrame& tri, const Axis& axis, ContactPoint* out) {
+  int best = -1;
+  Real best_height = kInf;
+  for (int e = 0; e < shape.edge_count; ++e) {
+    if (shape.edge_direction[e] != axis.shape_index) continue;
+    const Real height = axis.normal.dot(shape.vertices[shape.edge_from[e]] + shape.vertices[shape.edge_to[e]]);
+    if (height < best_height) {
+      best_height = height;
+      best = e;
+    }
+  }
+  if (best < 0) return 0;
+  // Where the two edges cross when seen along N: the closest points of their lines (the segment
+  // between them is along N). When the edge pair is the least axis both lie on the edges and
+  // position - N * depth is exactly on the shape's edge; when they do not (an edge axis that is
+  // nearly a face normal, picked by rounding), there is no edge-edge contact and the caller falls
+  // back to the face axes.
+  const Vec3& p0 = shape.vertices[shape.edge_from[best]];
+  const Vec3& q0 = tri.v[axis.triangle_index];
+  const Vec3 d1 = shape.vertices[shape.edge_to[best]] - p0;
+  const Vec3 d2 = tri.v[(axis.triangle_index + 1) % 3] - q0;
+  const Vec3 n = d1.cross(d2);
+  const Real nn = n.squaredNorm();
+  if (!(nn > 0)) return 0;
+  const Real s = (q0 - p0).cross(d2).dot(n) / nn;
+  const Real t = (q0 - p0).cross(d1).dot(n) / nn;
+  constexpr Real kOnEdge = 1e-9;
+  if (!(s >= -kOnEdge && s <= 1 + kOnEdge && t >= -kOnEdge && t <= 1 + kOnEdge)) return 0;
+  const Vec3 on_triangle = q0 + std::clamp(t, Real(0), Real(1)) * d2;
+  out[0] = make_contact(on_triangle, axis.normal, axis.overlap);
+  return 1;
+}
+
+// The closest pair of the shape and the triangle when they are apart: it joins a vertex of one to
+// the other, or two edges, so those candidates cover it (a face-face or edge-face pair, when
+// parallel, always contains such a pair too).
+struct PolytopeTrianglePair {
+  Vec3 on_shape = Vec3::Zero();
+  Vec3 on_triangle = Vec3::Zero();
+  Real distance_squared = kInf;
+};
+
+PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const TriangleFrame& tri) {
+  PolytopeTrianglePair best;
+  const auto consider = [&](const Vec3& x, const Vec3& y) {
+    const Real d2 = (x - y).squaredNorm();
+    if (d2 < best.distance_squared) best = {x, y, d2};
+  };
+  for (int i = 0; i < shape.vertex_count; ++i) {
+    consider(shape.vertices[i], closest_point_on_triangle(shape.vertices[i], tri.v[0], tri.v[1], tri.v[2]));
+  }
+  for (int j = 0; j < 3; ++j) consider(shape.closest_point(tri.v[j]), tri.v[j]);
+  for (int e = 0; e < shape.edge_count; ++e) {
+    for (int j = 0; j < 3; ++j) {
+      Vec3 x;
+      Vec3 y;
+      closest_points_of_segments(shape.vertices[shape.edge_from[e]], shape.vertices[shape.edge_to[e]], tri.v[j],
+                                 tri.v[(j + 1) % 3], x, y);
+      consider(x, y);
+    }
+  }
+  return best;
+}
+
+// Separating axes of a convex polytope against a triangle. Every axis is tested in both
+// directions; `separation` (the largest gap) is > 0 exactly when they are apart, and then it is a
+// lower bound of the distance. Overlapping: the least overlap is the penetration depth, its axis
+// the normal, and the contacts come from the features of that axis. Apart: the exact closest pair
+// decides, and the axis' features are used only when its gap is the distance (a face over a
+// vertex, crossing edges), so that a face hovering over a face still gets a patch.
+int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const ContactOptions& options,
+                      int max_contacts, ContactPoint* out) {
+  const Real size = std::max(shape.size, tri.size);
+  const Real slack = tolerance(size, std::max(shape.coord, tri.coord));
+  const Real margin = std::max(options.margin, Real(0));
+  const bool one_sided = tri.one_sided(options);
+  const Real center_side = tri.degenerate ? 0 : tri.signed_distance(shape.center);
+
+  // The overlap of the shape's and triangle's projections when the shape moves along N.
+  const auto overlap_along = [&](const Vec3& n) { return project(tri, n).hi - project(shape, n).lo; };
+
+  Axis best_face;
+  Axis best_tri_face;
+  Axis best_edge;
+  Real separation = -kInf;
+  const auto consider = [](Axis& best, const Axis& axis) {
+    if (axis.overlap < best.overlap) best = axis;
+  };
+  if (!tri.degenerate) {
+    const Real up = overlap_along(tri.normal);
+    const Real down = overlap_along(-tri.normal);
+    separation = std::max(separation, -std::min(up, down));
+    // Whichever side the shape's centre is on.
+    const Real sigma = center_side >= 0 ? 1 : -1;
+    consider(best_tri_face, {sigma * tri.normal, sigma > 0 ? up : down, AxisKind::kTriangleFace, 0, 0});
+  }
+  for (int f = 0; f < shape.face_count; ++f) {
+    const Vec3 n = -shape.faces[f].outward;
+    const Real ov = overlap_along(n);
+    separation = std::max(separation, -std::min(ov, overlap_along(-n)));
+    consider(best_face, {n, ov, AxisKind::kShapeFace, f, 0});
+  }
+  for (int k = 0; k < shape.direction_count; ++k) {
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
+      const Vec3 u = shape.directions[k].cross(e);
+      const Real len = u.norm();
+      // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
+      if (!(len > 1e-6 * e.norm())) continue;
+      const Vec3 n = u / len;
+      const Real plus = overlap_along(n);
+      const Real minus = overlap_along(-n);
+      separation = std::max(separation, -std::min(plus, minus));
+      consider(best_edge, {n, plus, AxisKind::kEdges, k, j});
+      consider(best_edge, {-n, minus, AxisKind::kEdges, k, j});
+    }
+  }
+  if (separation > margin || !(separation == separation)) return 0;
+  const bool apart = separation > 0;
+
+  // Faces first: the triangle's face unless a face of the shape is clearly better, then an edge
+  // pair only if clearly better than that.
+  const auto bias = [&](Real overlap) { return kFaceBias * std::abs(overlap) + slack; };
+  Axis chosen = best_face;
+  if (best_tri_face.overlap < kInf &&
+      (best_face.overlap == kInf || best_tri_face.overlap <= best_face.overlap + bias(best_face.overlap))) {
+    chosen = best_tri_face;
+  }
+  const Axis face_choice = chosen;
+  if (best_edge.overlap < kInf && (chosen.overlap == kInf || best_edge.overlap < chosen.overlap - bias(chosen.overlap))) {
+    chosen = best_edge;
+  }
+  if (chosen.overlap == kInf) return 0;  // no axis at all: only for shapes without faces or edges
+
+  // One-sided: a shape behind the plane, or whose natural normal points behind it, is pushed out
+  // through the front face by its directional penetration, if it overlaps at all.
+  if (one_sided && (center_side < 0 || chosen.normal.dot(tri.normal) < -kBehind)) {
+    if (apart) return 0;
+    chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
+  } else if (apart) {
+    const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
+    const Real distance = std::sqrt(pair.distance_squared);
+    if (!(distance <= margin)) return 0;
+    if (-chosen.overlap < distance - slack) {
+      // The chosen axis' gap is short of the distance: its features are not the closest ones.
+      const Vec3 normal = (pair.on_shape - pair.on_triangle) / distance;
+      if (one_sided && normal.dot(tri.normal) < -kBehind) return 0;
+      out[0] = make_contact(pair.on_triangle, normal, -distance);
+      return 1;
+    }
+  }
+
+  std::array<ContactPoint, kScratchContacts> scratch;
+  const auto generate = [&](const Axis& axis) {
+    switch (axis.kind) {
+      case AxisKind::kTriangleFace: return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
+      case AxisKind::kShapeFace: return shape_face_contacts(shape.faces[axis.shape_index], tri, scratch.data());
+      case AxisKind::kEdges: return edge_contacts(shape, tri, axis, scratch.data());
+    }
+    return 0;
+  };
+  int count = generate(chosen);
+  if (count == 0 && chosen.kind == AxisKind::kEdges && face_choice.overlap < kInf) {
+    chosen = face_choice;
+    count = generate(chosen);
+  }
+  int kept = 0;
+  for (int i = 0; i < count; ++i) {
+    if (scratch[i].depth >= -margin && scratch[i].depth == scratch[i].depth) scratch[kept++] = scratch[i];
+  }
+  if (kept == 0) {
+    // Only rounding can leave the chosen feature without a point: report the triangle's
+    // supporting corner along the normal at the axis' overlap.
+    int corner = 0;
+    for (int j = 1; j < 3; ++j) {
+      if (chosen.normal.dot(tri.v[j]) > chosen.normal.dot(tri.v[corner])) corner = j;
+    }
+    scratch[0] = make_contact(tri.v[corner], chosen.normal, chosen.overlap);
+    kept = 1;
+  }
+  kept = reduce_in_place(scratch.data(), kept, max_contacts, 1e-7 * size + slack);
+  std::copy(scratch.begin(), scratch.begin() + kept, out);
+  return kept;
+}
+
+// ---------------------------------------------------------------------------------------------
+// libccd glue
+
+struct CcdTriangle {
+  const TriangleFrame* tri;
+  Real inflate;  // the triangle rounded by this radius
+};
+
+struct CcdShape {
+  const ConvexSupport* shape;
+  Vec3 offset;  // the shape translated by this
+};
+
+Vec3 to_vec(const ccd_vec3_t* v) { return {v->v[0], v->v[1], v->v[2]}; }
+void from_vec(const Vec3& x, ccd_vec3_t* v) { ccdVec3Set(v, x.x(), x.y(), x.z()); }
+
+void ccd_triangle_support(const void* object, const ccd_vec3_t* direction, ccd_vec3_t* result) {
+  const auto* t = static_cast<const CcdTriangle*>(object);
+  const Vec3 d = to_vec(direction);
+  int best = 0;
+  for (int j = 1; j < 3; ++j) {
+    if (d.dot(t->tri->v[j]) > d.dot(t->tri->v[best])) best = j;
+  }
+  Vec3 x = t->tri->v[best];
+  const Real len = d.norm();
+  if (t->inflate > 0 && len > 0) x += (t->inflate / len) * d;
+  from_vec(x, result);
+}
+
+void ccd_triangle_center(const void* object, ccd_vec3_t* center) {
+  const auto* t = static_cast<const CcdTriangle*>(object);
+  from_vec((t->tri->v[0] + t->tri->v[1] + t->tri->v[2]) / 3, center);
+}
+
+void ccd_shape_support(const void* object, const ccd_vec3_t* direction, ccd_vec3_t* result) {
+  const auto* s = static_cast<const CcdShape*>(object);
+  from_vec(s->shape->support(to_vec(direction)) + s->offset, result);
+}
+
+void ccd_shape_center(const void* object, ccd_vec3_t* center) {
+  const auto* s = static_cast<const CcdShape*>(object);
+  from_vec(s->shape->center + s->offset, center);
+}
+
+// Local minimization of f(u) (the projections' overlap along the unit normal u) from `normal`:
+// a pattern search over 8 tangent directions plus the last successful move (which follows a
+// valley that is not aligned with the pattern, as along a rounded edge), doubling the step after
+// a success and halving it after a failure. A non-zero `front` keeps u.front >= -kBehind.
+template <class F>
+void polish_normal(const F& f, const Vec3& front, Vec3& normal, Real& value) {
+  Real step = 1e-2;
+  int evaluations = 0;
+  Vec3 momentum = Vec3::Zero();
+  while (step > 1e-12 && evaluations < 600) {
+    Vec3 t1;
+    Vec3 t2;
+    detail::orthonormal_completion(normal, t1, t2);
+    const Real r = std::sqrt(Real(0.5));
+    const Vec3 moves[9] = {momentum, t1, -t1, t2, -t2, r * (t1 + t2), r * (t1 - t2), -r * (t1 + t2), -r * (t1 - t2)};
+    bool improved = false;
+    for (const Vec3& move : moves) {
+      if (move.squaredNorm() == 0) continue;
+      const Vec3 candidate = (normal + step * move).normalized();
+      if (candidate.dot(front) < -kBehind) continue;  // never wander behind a one-sided triangle
+      const Real candidate_value = f(candidate);
+      ++evaluations;
+      if (candidate_value < value) {
+        momentum = (candidate - normal).normalized();
+        normal = candidate;
+        value = candidate_value;
+        improved = true;
+        break;
+      }
+    }
+    if (!improved) momentum.setZero();
+    step = improved ? step * 2 : step / 2;
+  }
+}
+
+ccd_t make_ccd(Real size) {
+  ccd_t ccd;
+  CCD_INIT(&ccd);
+  ccd.support1 = ccd_triangle_support;
+  ccd.support2 = ccd_shape_support;
+  ccd.center1 = ccd_triangle_center;
+  ccd.center2 = ccd_shape_center;
+  // Bounded effort: curved shapes (cylinders, the rounded triangle) make EPA converge linearly.
+  ccd.max_iterations = 200;
+  ccd.epa_tolerance = 1e-8 * size;
+  ccd.mpr_tolerance = 1e-8 * size;
+  ccd.dist_tolerance = 1e-10 * size;
+  return ccd;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Sphere
+
+int contact_sphere_triangle(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c,
+                            const ContactOptions& options, ContactPoint* out) {
+  if (!finite(a, b, c) || !sphere.center.allFinite() || !std::isfinite(sphere.radius)) return 0;
+  const TriangleFrame tri(a, b, c);
+  const Real r = sphere.radius;
+  const Vec3& p = sphere.center;
+  const Vec3 q = closest_point_on_triangle(p, a, b, c);
+  const Vec3 d = p - q;
+  const Real distance = d.norm();
+  if (!(distance <= r + std::max(options.margin, Real(0)))) return 0;  // also rejects NaN
+
+  if (tri.one_sided(options)) {
+    const Real s = tri.signed_distance(p);
+    if (s < 0) {
+      // Behind: the least lift t along n with |p + t n - q'| >= r for every q' of the triangle.
+      // The triangle is planar, so with the in-plane offset l of p from it that is
+      // (s + t)^2 + l^2 >= r^2, i.e. t = sqrt(r^2 - l^2) - s, touching at the same q.
+      if (distance > r) return 0;
+      const Real lateral_squared = std::max(Real(0), distance * distance - s * s);
+      const Real depth = std::sqrt(std::max(Real(0), r * r - lateral_squared)) - s;
+      out[0] = make_contact(q, tri.normal, depth);
+      return 1;
+    }
+  }
+  Vec3 normal;
+  if (distance > tolerance(std::max(r, tri.size), std::max(tri.coord, max_abs(p)))) {
+    normal = d / distance;
+  } else if (!tri.degenerate) {
+    // The centre is on the triangle: out through the front face (the side is undecided).
+    normal = tri.normal;
+  } else {
+    const auto [s, e] = extent_of(tri);
+    normal = perpendicular_to(e - s);
+  }
+  out[0] = make_contact(q, normal, r - distance);
+  return 1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Capsule
+
+int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
+                             const ContactOptions& options, ContactPoint* out) {
+  if (!finite(a, b, c) || !finite(capsule.p0, capsule.p1, Vec3::Constant(capsule.radius))) return 0;
+  const TriangleFrame tri(a, b, c);
+  const Real r = capsule.radius;
+  const Real margin = std::max(options.margin, Real(0));
+  const Vec3& p0 = capsule.p0;
+  const Vec3& p1 = capsule.p1;
+  const Vec3 d = p1 - p0;
+  const Real size = std::max({tri.size, d.norm(), r});
+  const Real coord = std::max({tri.coord, max_abs(p0), max_abs(p1)});
+  const Real tiny = tolerance(size, coord);
+
+  const SegmentTrianglePair pair = closest_segment_triangle(p0, p1, tri);
+  const Real distance = std::sqrt(pair.distance_squared);
+  if (!(distance <= r + margin)) return 0;
+
+  const bool one_sided = tri.one_sided(options);
+  const Real center_side = tri.degenerate ? 0 : tri.signed_distance((p0 + p1) / 2);
+
+  ContactPoint primary;
+  bool push_out = one_sided && center_side < 0;
+  if (!push_out && distance > tiny) {
+    // Apart cores: the closest pair gives the exact normal and depth.
+    primary = make_contact(pair.on_triangle, (pair.on_segment - pair.on_triangle) / distance, r - distance);
+    push_out = one_sided && primary.normal.dot(tri.normal) < -kBehind;
+  } else if (!push_out && tri.degenerate) {
+    // The core touches a segment or point: their Minkowski difference is flat, the core's
+    // penetration is zero, and the normal is across both.
+    const auto [s, e] = extent_of(tri);
+    Vec3 n = (e - s).cross(d);
+    if (!(n.norm() > tiny * size)) n = perpendicular_to((e - s).squaredNorm() > 0 ? Vec3(e - s) : d);
+    n.normalize();
+    if (n.dot((p0 + p1) / 2 - pair.on_triangle) < 0) n = -n;
+    primary = make_contact(pair.on_triangle, n, r);
+  } else if (!push_out) {
+    // The core touches the triangle: separating axes of the segment against the triangle.
+    const auto seg_interval = [&](const Vec3& n) {
+      const Real x0 = n.dot(p0);
+      const Real x1 = n.dot(p1);
+      return Interval{std::min(x0, x1), std::max(x0, x1)};
+    };
+    Vec3 best_normal = tri.normal;
+    Real best_overlap = kInf;
+    int best_edge = -1;
+    const auto consider = [&](const Vec3& n, int edge) {
+      const Real overlap = project(tri, n).hi - seg_interval(n).lo;
+      if (overlap < best_overlap) {
+        best_overlap = overlap;
+        best_normal = n;
+        best_edge = edge;
+      }
+    };
+    consider(center_side >= 0 ? tri.normal : Vec3(-tri.normal), -1);
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
+      const Vec3 u = e.cross(d);
+      const Real len = u.norm();
+      if (!(len > 1e-6 * e.norm() * d.norm())) continue;
+      consider(u / len, j);
+      consider(-u / len, j);
+    }
+    Vec3 position;
+    if (best_edge < 0) {
+      // Face: the deepest end of the core, projected on the plane (inside the triangle when the
+      // face axis is the least one; the clamp only absorbs rounding).
+      const Vec3& deepest = best_normal.dot(p0) <= best_normal.dot(p1) ? p0 : p1;
+      position = closest_point_on_triangle(deepest - tri.signed_distance(deepest) * tri.normal, a, b, c);
+    } else {
+      Vec3 on_segment;
+      closest_points_of_segments(p0, p1, tri.v[best_edge], tri.v[(best_edge + 1) % 3], on_segment, position);
+    }
+    primary = make_contact(position, best_normal, r + best_overlap);
+    push_out = one_sided && best_normal.dot(tri.normal) < -kBehind;
+  }
+
+  if (push_out) {
+    // Behind a one-sided triangle: the least lift along n that clears it, by bisection on the
+    // exact overlap test (the lifts that overlap form an interval containing 0, since the
+    // capsule moved along a line sweeps a convex set).
+    if (distance > r) return 0;
+    const auto overlaps_at = [&](Real t) {
+      const Vec3 lift = t * tri.normal;
+      return segment_triangle_distance_squared(p0 + lift, p1 + lift, a, b, c) <= r * r;
+    };
+    Real lo = 0;
+    Real hi = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
+    for (int iteration = 0; iteration < 200 && hi - lo > tiny; ++iteration) {
+      const Real mid = (lo + hi) / 2;
+      (overlaps_at(mid) ? lo : hi) = mid;
+    }
+    const Vec3 lift = hi * tri.normal;
+    const SegmentTrianglePair touch = closest_segment_triangle(p0 + lift, p1 + lift, tri);
+    primary = make_contact(touch.on_triangle, tri.normal, hi);
+  }
+
+  // Lying on the face (the normal is the face's): the two ends of the core over the triangle,
+  // each at its own depth, so that the capsule rests on a segment rather than a point.
+  int count = 0;
+  Real t0 = 0;
+  Real t1 = 0;
+  if (!tri.degenerate && std::abs(primary.normal.dot(tri.normal)) >= 1 - 1e-9 &&
+      clip_segment_to_prism(p0, p1, tri, t0, t1) &&
+      ((t1 - t0) * (d - tri.normal.dot(d) * tri.normal)).norm() > 1e-6 * size) {
+    const Real sigma = primary.normal.dot(tri.normal) > 0 ? 1 : -1;
+    ContactPoint ends[2];
+    for (int k = 0; k < 2; ++k) {
+      const Vec3 x = p0 + (k == 0 ? t0 : t1) * d;
+      const Real s = tri.signed_distance(x);
+      ends[k] = make_contact(closest_point_on_triangle(x - s * tri.normal, a, b, c), primary.normal, r - sigma * s);
+    }
+    if (ends[1].depth > ends[0].depth) std::swap(ends[0], ends[1]);
+    // The exact deepest point can lie just beyond an end (a rounded cap over an edge when pushed
+    // out): then it replaces the shallower end.
+    if (primary.depth > ends[0].depth + tiny) {
+      ends[1] = ends[0];
+      ends[0] = primary;
+    }
+    for (const ContactPoint& end : ends) {
+      if (end.depth >= -margin) out[count++] = end;
+    }
+  }
+  if (count == 0) out[count++] = primary;
+  return count;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Box
+
+int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options,
+                         ContactPoint* out) {
+  if (!finite(a, b, c) || !box.center.allFinite() || !box.axes.allFinite() || !box.half_extents.allFinite()) return 0;
+  const TriangleFrame tri(a, b, c);
+  return polytope_triangle(polytope_of_box(box), tri, options, kMaxBoxTriangleContacts, out);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Triangle pairs
+
+int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                              const Vec3& b2, const ContactOptions& options, ContactPoint* out) {
+  if (!finite(a0, a1, a2) || !finite(b0, b1, b2)) return 0;
+  const TriangleFrame ta(a0, a1, a2);
+  const TriangleFrame tb(b0, b1, b2);
+  if (ta.degenerate && tb.degenerate) {
+    // Two segments (or points): no face normal anywhere, only the closest pair.
+    const auto [sa, ea] = extent_of(ta);
+    const auto [sb, eb] = extent_of(tb);
+    Vec3 on_a;
+    Vec3 on_b;
+    closest_points_of_segments(sa, ea, sb, eb, on_a, on_b);
+    const Real distance = (on_a - on_b).norm();
+    if (!(distance <= std::max(options.margin, Real(0)))) return 0;
+    Vec3 n;
+    if (distance > tolerance(std::max(ta.size, tb.size), std::max(ta.coord, tb.coord))) {
+      n = (on_a - on_b) / distance;
+    } else {
+      n = (eb - sb).cross(ea - sa);
+      n = n.norm() > 0 ? Vec3(n.normalized()) : perpendicular_to((eb - sb).squaredNorm() > 0 ? Vec3(eb - sb) : Vec3(ea - sa));
+    }
+    out[0] = make_contact(on_b, n, -distance);
+    return 1;
+  }
+  return polytope_triangle(polytope_of_triangle(ta), tb, options, kMaxTriangleTriangleContacts, out);
+}
+
+// ---------------------------------------------------------------------------------------------
+// General convex shapes
+
+Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& direction) {
+  const Vec3 axis = p1 - p0;
+  const Real length = axis.norm();
+  if (!(length > 0)) {
+    // No axis to orient the disks by: the sphere of that radius (a conservative stand-in).
+    const Real len = direction.norm();
+    return len > 0 ? Vec3(p0 + (radius / len) * direction) : p0;
+  }
+  const Vec3 u = axis / length;
+  const Real along = direction.dot(u);
+  const Vec3 end = along >= 0 ? p1 : p0;
+  const Vec3 radial = direction - along * u;
+  const Real radial_length = radial.norm();
+  if (!(radial_length > 0)) return end;
+  return end + (radius / radial_length) * radial;
+}
+
+Vec3 support_points(const std::vector<Vec3>& points, const Vec3& direction) {
+  if (points.empty()) return Vec3::Zero();
+  std::size_t best = 0;
+  Real best_dot = direction.dot(points[0]);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const Real x = direction.dot(points[i]);
+    if (x > best_dot) {
+      best_dot = x;
+      best = i;
+    }
+  }
+  return points[best];
+}
+
+int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec3& b, const Vec3& c,
+                            const ContactOptions& options, ContactPoint* out) {
+  // 1. GJK + EPA (libccd) against the triangle rounded by the margin. Rounding grows the Minkowski
+  //    difference by a ball of radius `margin`, which adds exactly `margin` to the depth of every
+  //    origin inside it (penetrating, or apart by less than the margin) along the same normal; so
+  //    one call covers the separated-within-margin case and the depth is EPA's minus the margin.
+  // 2. EPA's polytope lies inside the Minkowski difference, so on curved shapes (cylinders, the
+  //    rounded triangle) its depth is short of the truth and its normal slightly off. The answer is
+  //    therefore polished: the depth along a unit normal u is the projections' overlap
+  //    f(u) = max_triangle u.p - min_shape u.x (moving the shape by f(u) along u separates them),
+  //    and the least f over directions is the penetration depth (or minus the distance when apart).
+  //    A local pattern search on the sphere from EPA's normal minimizes f; the reported depth is
+  //    f at the reported normal, so moving by it always separates.
+  if (!finite(a, b, c) || !shape.center.allFinite()) return 0;
+  const TriangleFrame tri(a, b, c);
+  const Real margin = std::max(options.margin, Real(0));
+  Real shape_size = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 axis = Vec3::Unit(k);
+    shape_size = std::max(shape_size, axis.dot(shape.support(axis)) + axis.dot(shape.support(-axis)));
+  }
+  const Real size = std::max({tri.size, shape_size, margin});
+  if (!(size > 0) || !(size < kInf)) return 0;
+  const ccd_t ccd = make_ccd(size);
+
+  const auto overlap_along = [&](const Vec3& u) {
+    return project(tri, u).hi - u.dot(shape.support(-u));
+  };
+  const CcdShape moved{&shape, Vec3::Zero()};
+  const bool one_sided = tri.one_sided(options);
+  bool push_out = one_sided && tri.signed_distance(shape.center) < 0;
+  Vec3 normal = tri.normal;
+  Real depth = 0;
+  if (!push_out) {
+    const CcdTriangle rounded{&tri, margin};
+    ccd_real_t epa_depth = 0;
+    ccd_vec3_t direction;
+    ccd_vec3_t position;
+    // obj1 = triangle, obj2 = shape: libccd's direction moves obj2 out, which is our normal.
+    if (ccdGJKPenetration(&rounded, &moved, &ccd, &epa_depth, &direction, &position) != 0) return 0;
+    Vec3 epa_normal = to_vec(&direction);
+    const Real len = epa_normal.norm();
+    if (!(len > 0) || !epa_normal.allFinite()) return 0;
+    epa_normal /= len;
+    // EPA can end in the wrong basin on deep or curved configurations. The overlap is cheap to
+    // evaluate, so it is also taken along the triangle's normals, its in-plane edge normals and
+    // the direction of the centre; the polish starts from the two best of these and EPA's normal.
+    std::array<std::pair<Real, Vec3>, 10> starts;
+    int start_count = 0;
+    const auto add_start = [&](const Vec3& towards) {
+      const Real norm = towards.norm();
+      if (!(norm > 0) || !towards.allFinite()) return;
+      const Vec3 u = towards / norm;
+      if (one_sided && u.dot(tri.normal) < -kBehind) return;
+      starts[start_count++] = {overlap_along(u), u};
+    };
+    add_start(shape.center - closest_point_on_triangle(shape.center, a, b, c));
+    if (!tri.degenerate) {
+      add_start(tri.normal);
+      add_start(-tri.normal);
+      for (int j = 0; j < 3; ++j) add_start((tri.v[(j + 1) % 3] - tri.v[j]).cross(tri.normal));  // outward
+    }
+    std::sort(starts.begin(), starts.begin() + start_count,
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    start_count = std::min(start_count, 2);
+    starts[start_count++] = {overlap_along(epa_normal), epa_normal};
+    depth = kInf;
+    for (int k = 0; k < start_count; ++k) {
+      Vec3 start = starts[k].second;
+      Real value = starts[k].first;
+      polish_normal(overlap_along, one_sided ? tri.normal : Vec3::Zero(), start, value);
+      if (value < depth) {
+        depth = value;
+        normal = start;
+      }
+    }
+    if (depth < -margin) return 0;
+    push_out = one_sided && normal.dot(tri.normal) < -kBehind;
+  }
+  if (push_out) {
+    // Directional penetration along the front normal n: the least lift t such that the shape
+    // moved by t*n is apart. Moving by t*n shifts the projections on any u by t*(u.n), so every u
+    // with u.n > 0 bounds t by f(u)/(u.n), and the least bound is the lift (the support-function
+    // form of a ray cast through the Minkowski difference). The bound is minimized from u = n by
+    // the same pattern search, so the reported lift always separates.
+    const CcdTriangle flat{&tri, 0};
+    if (!ccdGJKIntersect(&flat, &moved, &ccd)) return 0;  // behind and apart: not seen
+    const auto lift_bound = [&](const Vec3& u) {
+      const Real along = u.dot(tri.normal);
+      return along > 1e-6 ? overlap_along(u) / along : kInf;
+    };
+    Vec3 u = tri.normal;
+    Real lift = lift_bound(u);
+    polish_normal(lift_bound, tri.normal, u, lift);
+    normal = tri.normal;
+    depth = lift;
+  }
+  // The position: where the shape's deepest point lands when moved out, on the triangle's
+  // supporting feature along the normal (a corner, an edge, or the face).
+  const Vec3 landing = shape.support(-normal) + depth * normal;
+  const Real top = project(tri, normal).hi;
+  const Real feature_slack = 1e-6 * size;
+  int on_top[3];
+  int count = 0;
+  for (int j = 0; j < 3; ++j) {
+    if (normal.dot(tri.v[j]) >= top - feature_slack) on_top[count++] = j;
+  }
+  Vec3 position;
+  if (count == 1) {
+    position = tri.v[on_top[0]];
+  } else if (count == 2) {
+    Vec3 unused;
+    closest_points_of_segments(landing, landing, tri.v[on_top[0]], tri.v[on_top[1]], unused, position);
+  } else {
+    position = closest_point_on_triangle(landing, a, b, c);
+  }
+  out[0] = make_contact(position, normal, depth);
+  return 1;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+void reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance) {
+  // More than 64 contacts: the area-greedy selection looks at the deepest 64 (after merging).
+  const int limit = static_cast<int>(std::clamp<std::size_t>(max_count, 1, 1 << 20));
+  contacts.resize(reduce_in_place(contacts.data(), static_cast<int>(contacts.size()), limit, merge_distance));
+}
+
+}  // namespace boxtree
