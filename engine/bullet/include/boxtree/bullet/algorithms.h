@@ -1,0 +1,34 @@
+#pragma once
+// Collision algorithms for BoxtreeMeshShape, registered with a btCollisionDispatcher:
+//  - convex body vs boxtree mesh: queries the tree with the body's tight volume (sphere, oriented
+//    box, capsule; the body's box in the mesh frame for other convex shapes), computes sphere /
+//    capsule / box contacts per facet with the core's analytic routines (boxtree/contact.h) and
+//    falls back to Bullet's per-triangle GJK for other convex shapes;
+//  - boxtree mesh vs boxtree mesh (Bullet itself has nothing for concave vs concave): the
+//    tree-vs-tree query plus triangle-triangle contacts.
+//
+// Call once per dispatcher, before any body is added to the world (Bullet caches an algorithm
+// per overlapping pair).
+#include <btBulletCollisionCommon.h>
+
+namespace boxtree::bullet {
+
+struct AlgorithmSettings {
+  // Convex vs mesh: the analytic routines for spheres, boxes and capsules (else Bullet's GJK for
+  // every candidate triangle, with the boxtree's tight-volume query still in front).
+  bool analyticContacts = true;
+  // Register the convex-vs-boxtree algorithm at all (false: Bullet's btConvexConcaveCollisionAlgorithm,
+  // fed by processAllTriangles with the body's box).
+  bool convexAlgorithm = true;
+  // Register boxtree-vs-boxtree (mesh vs mesh).
+  bool meshMeshAlgorithm = true;
+};
+
+void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const AlgorithmSettings& settings = {});
+
+// The largest algorithm object these create, for btDefaultCollisionConstructionInfo::
+// m_customCollisionAlgorithmMaxElementSize (registerBoxtreeAlgorithms checks it and throws
+// boxtree::Error if the dispatcher's pool is too small).
+int boxtreeAlgorithmMaxSize();
+
+}  // namespace boxtree::bullet

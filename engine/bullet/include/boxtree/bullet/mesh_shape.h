@@ -1,0 +1,99 @@
+#pragma once
+// BoxtreeMeshShape: a static (or kinematic, or dynamic) triangle-mesh shape for Bullet whose
+// midphase is a boxtree. Drop-in where a program uses btBvhTriangleMeshShape:
+//
+//   btCollisionShape* ground = new boxtree::bullet::BoxtreeMeshShape(meshInterface, "aabb");
+//   boxtree::bullet::registerBoxtreeAlgorithms(dispatcher);  // once, before adding bodies
+//
+// What it answers, and how (see ../../README.md for the details and the measurements):
+//  - processAllTriangles (Bullet's generic concave contract): the boxtree's volume query with the
+//    query box; triangles are reported in the shape's local frame with local scaling applied,
+//    with the mesh's own part id and triangle index so user callbacks and materials work.
+//  - rayTest / convexSweepTest: recognised inside processAllTriangles (the callbacks are
+//    btTriangleRaycastCallback / btTriangleConvexcastCallback) and answered by a front-to-back
+//    ray walk of the tree that prunes with the current closest hit.
+//  - convex bodies against the mesh, and mesh against mesh: collision algorithms registered by
+//    registerBoxtreeAlgorithms (algorithms.h) that query with the body's tight volume.
+//
+// The shape type is FAST_CONCAVE_MESH_PROXYTYPE: Bullet gives it the generic concave treatment
+// and casts it to nothing (CUSTOM_CONCAVE_SHAPE_TYPE would be taken for an SDF shape in 3.24).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <btBulletCollisionCommon.h>
+
+class btTriangleConvexcastCallback;
+
+#include "boxtree/any_tree.h"
+
+namespace boxtree::bullet {
+
+ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
+ public:
+  BT_DECLARE_ALIGNED_ALLOCATOR();
+
+  // Copies the triangles of every part of `mesh` (its scaling becomes the shape's local
+  // scaling) and builds the tree with `method` (boxtree::parse_method names: "aabb",
+  // "obb-min", "pie-min+aabb@3", ...). Throws boxtree::Error on a bad method or a mesh with
+  // NaN/Inf or out-of-range indices; the interface is not modified or kept.
+  explicit BoxtreeMeshShape(const btStridingMeshInterface& mesh, const std::string& method = "aabb",
+                            const BuildSettings& settings = {});
+  // From a boxtree mesh (one part, id 0; triangle index = facet id). The tree shares the mesh.
+  explicit BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method = "aabb",
+                            const BuildSettings& settings = {});
+  // From an already built tree (e.g. shared between shapes of several bodies).
+  explicit BoxtreeMeshShape(AnyTree tree);
+
+  // ---- btConcaveShape / btCollisionShape ----
+  void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
+                           const btVector3& aabbMax) const override;
+  void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override;
+  void setLocalScaling(const btVector3& scaling) override;
+  const btVector3& getLocalScaling() const override { return m_localScaling; }
+  // A static or kinematic mesh needs none; for a dynamic mesh: the inertia of the mesh's box
+  // (like btGImpactMeshShape's default), which is what Bullet programs expect for meshes.
+  void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
+  const char* getName() const override { return "BoxtreeMesh"; }
+
+  // ---- boxtree side ----
+  const AnyTree& tree() const { return m_tree; }
+  const TriangleMesh& mesh() const { return m_tree.mesh(); }
+  // Bullet's (part id, triangle index) of a facet, and back.
+  void facetToPart(FacetId facet, int& partId, int& triangleIndex) const;
+  FacetId partToFacet(int partId, int triangleIndex) const;
+  // A facet's corners in the shape's local frame, local scaling applied (as Bullet reports them).
+  void scaledTriangle(FacetId facet, btVector3 out[3]) const;
+  bool hasUnitScaling() const { return m_unitScaling; }
+  // Per facet, which edges are convex creases (boxtree/active_edges.h); contacts on the others
+  // get the face normal, so bodies slide over flat and concave edges without bumping.
+  const std::vector<std::uint8_t>& activeEdges() const { return m_activeEdges; }
+
+  // Counters for benchmarks and tests (not synchronized: read them from one thread).
+  struct Counters {
+    std::uint64_t queries = 0;                 // processAllTriangles box queries
+    std::uint64_t triangles = 0;               // triangles handed to Bullet callbacks by processAllTriangles
+    std::uint64_t ray_queries = 0;             // rays and sweeps answered by the ray path
+    std::uint64_t narrowphase_triangles = 0;   // triangles the boxtree algorithms ran a contact routine on
+  };
+  const Counters& counters() const { return m_counters; }
+  void resetCounters() const { m_counters = {}; }
+  void countNarrowphaseTriangles(std::uint64_t n) const { m_counters.narrowphase_triangles += n; }
+
+ private:
+  void init();
+  // A query box of the scaled local frame in the tree's (unscaled) frame, clipped to the mesh.
+  Aabb toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const;
+  void sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const;
+
+  AnyTree m_tree;
+  std::vector<FacetId> m_partFirstFacet;  // part p owns facets [m_partFirstFacet[p], m_partFirstFacet[p+1])
+  btVector3 m_localScaling{1, 1, 1};
+  bool m_unitScaling = true;
+  std::vector<std::uint8_t> m_activeEdges;
+  Aabb m_bounds;                             // unscaled mesh bounds
+  btVector3 m_localAabbMin, m_localAabbMax;  // the same, as Bullet vectors
+  mutable Counters m_counters;
+};
+
+}  // namespace boxtree::bullet

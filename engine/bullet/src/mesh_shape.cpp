@@ -1,0 +1,270 @@
+#include "boxtree/bullet/mesh_shape.h"
+
+#include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "boxtree/active_edges.h"
+#include "convert.h"
+
+namespace boxtree::bullet {
+namespace {
+
+// Reads index k of a face from a Bullet index array of any of its integer types.
+VertexId read_index(const unsigned char* face, PHY_ScalarType type, int k) {
+  switch (type) {
+    case PHY_INTEGER: return static_cast<VertexId>(reinterpret_cast<const int*>(face)[k]);
+    case PHY_SHORT: return reinterpret_cast<const unsigned short*>(face)[k];
+    case PHY_UCHAR: return face[k];
+    default: throw Error("BoxtreeMeshShape: unsupported index type in btStridingMeshInterface");
+  }
+}
+
+Vec3 read_vertex(const unsigned char* base, int stride, PHY_ScalarType type, VertexId v) {
+  const unsigned char* p = base + static_cast<std::size_t>(v) * static_cast<std::size_t>(stride);
+  if (type == PHY_FLOAT) {
+    const float* f = reinterpret_cast<const float*>(p);
+    return {f[0], f[1], f[2]};
+  }
+  if (type == PHY_DOUBLE) {
+    const double* d = reinterpret_cast<const double*>(p);
+    return {d[0], d[1], d[2]};
+  }
+  throw Error("BoxtreeMeshShape: unsupported vertex type in btStridingMeshInterface");
+}
+
+// Copies every part of a Bullet mesh interface into one boxtree mesh; part p's triangles get
+// consecutive facet ids starting at part_first[p], so a facet maps back to (part, index).
+std::shared_ptr<const TriangleMesh> copy_mesh(const btStridingMeshInterface& source, std::vector<FacetId>& part_first) {
+  auto mesh = std::make_shared<TriangleMesh>();
+  part_first.assign(1, 0);
+  for (int part = 0; part < source.getNumSubParts(); ++part) {
+    const unsigned char* vertices = nullptr;
+    const unsigned char* indices = nullptr;
+    int num_vertices = 0, vertex_stride = 0, index_stride = 0, num_faces = 0;
+    PHY_ScalarType vertex_type = PHY_FLOAT, index_type = PHY_INTEGER;
+    source.getLockedReadOnlyVertexIndexBase(&vertices, num_vertices, vertex_type, vertex_stride, &indices,
+                                            index_stride, num_faces, index_type, part);
+    // Unlock on every exit path: the interface is the caller's and must be left as it was.
+    struct Unlock {
+      const btStridingMeshInterface& s;
+      int part;
+      ~Unlock() { s.unLockReadOnlyVertexBase(part); }
+    } unlock{source, part};
+    if (num_faces < 0 || num_vertices < 0) throw Error("BoxtreeMeshShape: negative face or vertex count in part " + std::to_string(part));
+    const VertexId base = static_cast<VertexId>(mesh->vertices.size());
+    for (int v = 0; v < num_vertices; ++v)
+      mesh->vertices.push_back(read_vertex(vertices, vertex_stride, vertex_type, static_cast<VertexId>(v)));
+    for (int f = 0; f < num_faces; ++f) {
+      const unsigned char* face = indices + static_cast<std::size_t>(f) * static_cast<std::size_t>(index_stride);
+      Triangle t;
+      for (int k = 0; k < 3; ++k) {
+        const VertexId v = read_index(face, index_type, k);
+        if (v >= static_cast<VertexId>(num_vertices)) {
+          throw Error("BoxtreeMeshShape: part " + std::to_string(part) + ", triangle " + std::to_string(f) +
+                      ": vertex index " + std::to_string(static_cast<long long>(static_cast<int>(v))) +
+                      " out of range (the part has " + std::to_string(num_vertices) + " vertices)");
+        }
+        t[k] = base + v;
+      }
+      mesh->triangles.push_back(t);
+    }
+    part_first.push_back(static_cast<FacetId>(mesh->triangles.size()));
+  }
+  return mesh;
+}
+
+Method checked_method(const std::string& name) { return parse_method(name); }
+
+}  // namespace
+
+BoxtreeMeshShape::BoxtreeMeshShape(const btStridingMeshInterface& mesh, const std::string& method,
+                                   const BuildSettings& settings) {
+  const Method m = checked_method(method);
+  auto copy = copy_mesh(mesh, m_partFirstFacet);
+  m_tree = AnyTree::build(std::move(copy), m, settings);
+  init();
+  setLocalScaling(mesh.getScaling());
+}
+
+BoxtreeMeshShape::BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method,
+                                   const BuildSettings& settings)
+    : m_tree(AnyTree::build(std::move(mesh), checked_method(method), settings)) {
+  m_partFirstFacet = {0, static_cast<FacetId>(m_tree.facet_count())};
+  init();
+}
+
+BoxtreeMeshShape::BoxtreeMeshShape(AnyTree tree) : m_tree(std::move(tree)) {
+  if (m_tree.empty()) throw Error("BoxtreeMeshShape: the tree is empty");
+  m_partFirstFacet = {0, static_cast<FacetId>(m_tree.facet_count())};
+  init();
+}
+
+void BoxtreeMeshShape::init() {
+  m_shapeType = FAST_CONCAVE_MESH_PROXYTYPE;
+  m_bounds = m_tree.bounds();
+  m_activeEdges = compute_active_edges(m_tree.mesh());
+  m_localAabbMin = to_bt(m_bounds.min);
+  m_localAabbMax = to_bt(m_bounds.max);
+}
+
+void BoxtreeMeshShape::setLocalScaling(const btVector3& scaling) {
+  if (!std::isfinite(double(scaling.x())) || !std::isfinite(double(scaling.y())) || !std::isfinite(double(scaling.z())) ||
+      scaling.x() == 0 || scaling.y() == 0 || scaling.z() == 0) {
+    throw Error("BoxtreeMeshShape::setLocalScaling: scaling must be finite and non-zero");
+  }
+  m_localScaling = scaling;
+  m_unitScaling = scaling == btVector3(1, 1, 1);
+}
+
+void BoxtreeMeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const {
+  // Scaled local box (a negative scale swaps the ends), grown by the margin, then transformed.
+  const btVector3 a = m_localAabbMin * m_localScaling, b = m_localAabbMax * m_localScaling;
+  const btVector3 lo(btMin(a.x(), b.x()), btMin(a.y(), b.y()), btMin(a.z(), b.z()));
+  const btVector3 hi(btMax(a.x(), b.x()), btMax(a.y(), b.y()), btMax(a.z(), b.z()));
+  const btVector3 margin(getMargin(), getMargin(), getMargin());
+  const btVector3 half = (hi - lo) * btScalar(0.5) + margin;
+  const btVector3 center = t((hi + lo) * btScalar(0.5));
+  const btVector3 extent = t.getBasis().absolute() * half;
+  aabbMin = center - extent;
+  aabbMax = center + extent;
+}
+
+void BoxtreeMeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
+  // The inertia of the (scaled) bounding box, as btGImpactMeshShape does by default: meshes are
+  // rarely closed or of known density, and a box keeps the solver stable.
+  const btVector3 e = (m_localAabbMax - m_localAabbMin) * m_localScaling.absolute();
+  inertia = mass / btScalar(12) * btVector3(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(),
+                                           e.x() * e.x() + e.y() * e.y());
+}
+
+void BoxtreeMeshShape::facetToPart(FacetId facet, int& partId, int& triangleIndex) const {
+  const auto it = std::upper_bound(m_partFirstFacet.begin(), m_partFirstFacet.end(), facet);
+  partId = static_cast<int>(it - m_partFirstFacet.begin()) - 1;
+  triangleIndex = static_cast<int>(facet - m_partFirstFacet[static_cast<std::size_t>(partId)]);
+}
+
+FacetId BoxtreeMeshShape::partToFacet(int partId, int triangleIndex) const {
+  return m_partFirstFacet[static_cast<std::size_t>(partId)] + static_cast<FacetId>(triangleIndex);
+}
+
+void BoxtreeMeshShape::scaledTriangle(FacetId facet, btVector3 out[3]) const {
+  const TriangleMesh& m = m_tree.mesh();
+  for (int k = 0; k < 3; ++k) out[k] = to_bt(m.corner(facet, k)) * m_localScaling;
+}
+
+void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
+                                           const btVector3& aabbMax) const {
+  btVector3 triangle[3];
+  auto report = [&](FacetId f) {
+    int part = 0, index = 0;
+    facetToPart(f, part, index);
+    scaledTriangle(f, triangle);
+    ++m_counters.triangles;
+    callback->processTriangle(triangle, part, index);
+  };
+
+  // Rays (btCollisionWorld::rayTest on this shape): walk the tree front to back, pruned by the
+  // callback's own closest hit, instead of scanning the segment's whole box. The callback keeps
+  // doing Bullet's ray/triangle test, so hits, normals and ids are Bullet's.
+  if (auto* ray_cb = dynamic_cast<btTriangleRaycastCallback*>(callback)) {
+    ++m_counters.ray_queries;
+    const btVector3 inv(1 / m_localScaling.x(), 1 / m_localScaling.y(), 1 / m_localScaling.z());
+    Ray ray;
+    ray.origin = to_vec(ray_cb->m_from * inv);
+    ray.direction = to_vec((ray_cb->m_to - ray_cb->m_from) * inv);
+    ray.t_min = 0;
+    ray.t_max = ray_cb->m_hitFraction;
+    m_tree.ray_candidates(ray, [&](FacetId f, Real) {
+      report(f);
+      return Real(ray_cb->m_hitFraction);
+    });
+    return;
+  }
+
+  // Convex sweeps (convexSweepTest): the swept box of the cast shape, as an oriented box along
+  // the sweep, instead of the axis-aligned box of the whole sweep; candidates are handed over
+  // nearest first so that the callback's hit fraction prunes the rest.
+  if (auto* cast_cb = dynamic_cast<btTriangleConvexcastCallback*>(callback)) {
+    sweepCandidates(*cast_cb, [&](FacetId f) { report(f); });
+    return;
+  }
+
+  // Everything else (convex-concave contacts, debug drawing, internal-edge info, CCD, GImpact):
+  // the triangles overlapping the query box, in the unscaled frame of the tree.
+  ++m_counters.queries;
+  const Aabb box = toTreeFrame(aabbMin, aabbMax);
+  if (box.is_empty()) return;
+  const bool aabb_tree = m_tree.method().kind == VolumeKind::aabb && m_tree.method().hybrid_level == 0;
+  // Axis-aligned trees report exactly the triangles whose own box overlaps the query box (what
+  // btBvhTriangleMeshShape reports, without its quantization slack); oriented ones report the
+  // triangles that overlap the query box itself (their leaves are tighter than a triangle's box).
+  m_tree.query_overlap(box, [&](FacetId f) {
+    report(f);
+    return true;
+  }, nullptr, aabb_tree ? FacetTest::leaf_volume : FacetTest::exact_triangle);
+}
+
+Aabb BoxtreeMeshShape::toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const {
+  for (int i = 0; i < 3; ++i) {
+    if (std::isnan(double(aabbMin[i])) || std::isnan(double(aabbMax[i])) || aabbMin[i] > aabbMax[i]) return Aabb::empty();
+  }
+  const btVector3 inv(1 / m_localScaling.x(), 1 / m_localScaling.y(), 1 / m_localScaling.z());
+  Aabb box = Aabb::from_points(to_vec(aabbMin * inv), to_vec(aabbMax * inv));
+  // Clip to the mesh's bounds: keeps Bullet's "everything" boxes (±BT_LARGE_FLOAT, debug drawing)
+  // finite, and costs nothing.
+  box.min = box.min.cwiseMax(m_bounds.min);
+  box.max = box.max.cwiseMin(m_bounds.max);
+  return box;
+}
+
+void BoxtreeMeshShape::sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const {
+  ++m_counters.ray_queries;
+  // The cast shape's box at both ends of the sweep, in the mesh's (scaled) local frame, grown by
+  // the triangles' collision margin.
+  const btTransform to_local = cast.m_triangleToWorld.inverse();
+  btVector3 lo0, hi0, lo1, hi1;
+  cast.m_convexShape->getAabb(to_local * cast.m_convexShapeFrom, lo0, hi0);
+  cast.m_convexShape->getAabb(to_local * cast.m_convexShapeTo, lo1, hi1);
+  const Vec3 c0 = to_vec((lo0 + hi0) * btScalar(0.5)), c1 = to_vec((lo1 + hi1) * btScalar(0.5));
+  const Vec3 half = to_vec((hi0 - lo0) * btScalar(0.5)).cwiseMax(to_vec((hi1 - lo1) * btScalar(0.5))) +
+                    Vec3::Constant(Real(cast.m_triangleCollisionMargin));
+  const Vec3 motion = c1 - c0;
+  const Real length = motion.norm();
+  if (!(length == length) || !half.allFinite() || !c0.allFinite()) return;
+
+  // Candidates: triangles meeting the region the box sweeps. With unit scaling that region is
+  // bounded tightly by an oriented box along the motion; a non-uniform scale maps oriented boxes
+  // to parallelepipeds, so then the swept region's axis-aligned box is used.
+  std::vector<std::pair<Real, FacetId>> candidates;
+  Vec3 axis = length > 0 ? Vec3(motion / length) : Vec3::UnitX();
+  auto collect = [&](FacetId f) {
+    const TriangleMesh& m = m_tree.mesh();
+    Real start = std::numeric_limits<Real>::infinity();
+    for (int k = 0; k < 3; ++k) start = std::min(start, (m.corner(f, k).cwiseProduct(to_vec(m_localScaling)) - c0).dot(axis));
+    candidates.emplace_back(start, f);
+    return true;
+  };
+  if (m_unitScaling && length > 0) {
+    m_tree.query_overlap(swept_box(c0, c1, half), collect);
+  } else {
+    const Vec3 lo = c0.cwiseMin(c1) - half, hi = c0.cwiseMax(c1) + half;
+    const Aabb box = toTreeFrame(to_bt(lo), to_bt(hi));
+    if (box.is_empty()) return;
+    m_tree.query_overlap(box, collect);
+  }
+
+  // Nearest first: the box's leading face reaches a triangle starting at distance s along the
+  // motion no earlier than fraction (s - reach) / length; once that exceeds the callback's
+  // closest hit, no later candidate can be hit earlier.
+  std::sort(candidates.begin(), candidates.end());
+  const Real reach = axis.cwiseAbs().dot(half);
+  for (const auto& [start, f] : candidates) {
+    if (length > 0 && (start - reach) / length > Real(cast.m_hitFraction)) break;
+    report(f);
+  }
+}
+
+}  // namespace boxtree::bullet

@@ -1,0 +1,266 @@
+// The collision algorithms: bodies dropped on a terrain in two worlds (Bullet's own mesh shape,
+// and BoxtreeMeshShape with the convex-vs-boxtree algorithm), mesh vs mesh, internal edges.
+#include <gtest/gtest.h>
+
+#include <BulletCollision/CollisionShapes/btTriangleShape.h>
+#include <LinearMath/btPoolAllocator.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "boxtree/collide.h"
+#include "boxtree/geometry.h"
+#include "world.h"
+
+namespace boxtree::bullet::test {
+namespace {
+
+// Terrain height under (x, y) by a vertical ray against the core tree (brute force would do too).
+Real terrain_height(const AnyTree& tree, Real x, Real y) {
+  Ray ray{Vec3(x, y, 1000), Vec3(0, 0, -1)};
+  const auto hit = tree.ray_closest_hit(ray);
+  return hit ? 1000 - hit->t : -1e30;
+}
+
+std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
+  std::uniform_real_distribution<float> s(0.3f, 0.8f);
+  switch (kind % 5) {
+    case 0: return std::make_unique<btSphereShape>(s(rng));
+    case 1: return std::make_unique<btBoxShape>(btVector3(s(rng), s(rng), s(rng)));
+    case 2: return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, s(rng) * 1.5f);
+    case 3: return std::make_unique<btCylinderShapeZ>(btVector3(s(rng), s(rng), s(rng)));
+    default: {
+      auto hull = std::make_unique<btConvexHullShape>();
+      std::uniform_real_distribution<float> p(-0.6f, 0.6f);
+      for (int i = 0; i < 12; ++i) hull->addPoint(btVector3(p(rng), p(rng), p(rng)), false);
+      hull->recalcLocalAabb();
+      return hull;
+    }
+  }
+}
+
+struct DropScene {
+  World world;
+  BulletMesh mesh;
+  const BoxtreeMeshShape* shape = nullptr;
+  std::vector<btRigidBody*> bodies;
+  std::vector<int> contacts_per_step;
+
+  DropScene(bool boxtree, const TriangleMesh& terrain, int count, const AlgorithmSettings& settings = {},
+            const std::string& method = "aabb")
+      : world(boxtree, settings), mesh(terrain) {
+    if (boxtree) {
+      auto s = std::make_unique<BoxtreeMeshShape>(*mesh.array, method);
+      shape = s.get();
+      world.add(std::move(s), 0, btVector3(0, 0, 0));
+    } else {
+      world.add(std::make_unique<btBvhTriangleMeshShape>(mesh.array.get(), true), 0, btVector3(0, 0, 0));
+    }
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> xy(8, 42), angle(0, 3.14f);
+    for (int i = 0; i < count; ++i) {
+      const btVector3 p(xy(rng), xy(rng), 14 + float(i % 7) * 1.6f);
+      const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), angle(rng));
+      btRigidBody* body = world.add(make_body_shape(i, rng), 1, p, q);
+      // Some rolling resistance, so that spheres and cylinders settle in the hollows instead of
+      // rolling for ever: the comparison is about resting contact.
+      body->setRollingFriction(btScalar(0.05));
+      body->setSpinningFriction(btScalar(0.05));
+      body->setDamping(btScalar(0.05), btScalar(0.3));
+      bodies.push_back(body);
+    }
+  }
+  void run(int steps) {
+    for (int i = 0; i < steps; ++i) {
+      world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+      contacts_per_step.push_back(world.contact_points());
+    }
+  }
+  double mean_contacts(int from) const {
+    double sum = 0;
+    for (std::size_t i = std::size_t(from); i < contacts_per_step.size(); ++i) sum += contacts_per_step[i];
+    return sum / double(contacts_per_step.size() - std::size_t(from));
+  }
+};
+
+TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
+  const TriangleMesh terrain = make_terrain(32, 32, 4, 50, 6);
+  const AnyTree reference = AnyTree::build(std::make_shared<TriangleMesh>(BulletMesh(terrain).as_boxtree()), Method{});
+  const int count = 40, steps = 360;
+  DropScene bullet(false, terrain, count);
+  DropScene analytic(true, terrain, count);
+  AlgorithmSettings gjk_only;
+  gjk_only.analyticContacts = false;
+  DropScene gjk(true, terrain, count, gjk_only, "obb-min");
+  bullet.run(steps);
+  analytic.run(steps);
+  gjk.run(steps);
+  const char* names[] = {"bullet", "boxtree analytic", "boxtree gjk"};
+  int which = 0;
+  for (const DropScene* scene : {&bullet, &analytic, &gjk}) {
+    SCOPED_TRACE(names[which++]);
+    int moving = 0;
+    for (std::size_t i = 0; i < scene->bodies.size(); ++i) {
+      const btVector3 p = scene->bodies[i]->getCenterOfMassPosition();
+      const Real ground = terrain_height(reference, p.x(), p.y());
+      // Every body's centre ends above the terrain (their half sizes are >= 0.2)...
+      EXPECT_GT(Real(p.z()), ground) << "body " << i << " fell through";
+      moving += scene->bodies[i]->getLinearVelocity().length() > 0.5f;
+    }
+    // ... and nearly all are at rest (a few may still roll down a slope).
+    std::printf("%s: %d of %d bodies still moving\n", names[which - 1], moving, count);
+    EXPECT_LE(moving, count / 5);
+  }
+  const double at_rest_bullet = bullet.mean_contacts(steps - 60);
+  const double at_rest_analytic = analytic.mean_contacts(steps - 60);
+  const double at_rest_gjk = gjk.mean_contacts(steps - 60);
+  std::printf("contact points per step at rest (%d bodies): bullet bvh %.1f, boxtree analytic %.1f, boxtree gjk %.1f\n",
+              count, at_rest_bullet, at_rest_analytic, at_rest_gjk);
+  // Stated tolerance: within 35% of Bullet's own count. Each body has one manifold of at most 4
+  // points either way; the analytic routines find the same supports, GJK the same as Bullet.
+  EXPECT_NEAR(at_rest_analytic / at_rest_bullet, 1.0, 0.35);
+  EXPECT_NEAR(at_rest_gjk / at_rest_bullet, 1.0, 0.35);
+}
+
+TEST(BulletAlgorithms, TightVolumesSendFewerTrianglesToTheNarrowphase) {
+  const TriangleMesh terrain = make_terrain(64, 64, 8, 50, 6);
+  DropScene with_algorithm(true, terrain, 30);
+  AlgorithmSettings bullet_path;
+  bullet_path.convexAlgorithm = false;
+  DropScene without(true, terrain, 30, bullet_path);
+  with_algorithm.run(120);
+  without.run(120);
+  // Without the algorithm, Bullet's convex-concave path asks processAllTriangles with each body's
+  // box and runs its narrowphase on every triangle returned; with it, processAllTriangles is
+  // never called for contacts and only triangles meeting the body's own volume get a contact
+  // routine.
+  EXPECT_EQ(with_algorithm.shape->counters().queries, 0u);
+  const auto tight = with_algorithm.shape->counters().narrowphase_triangles;
+  const auto by_box = without.shape->counters().triangles;
+  std::printf("triangles to the narrowphase over 120 steps: %llu with the body's volume, %llu with its box\n",
+              static_cast<unsigned long long>(tight), static_cast<unsigned long long>(by_box));
+  EXPECT_GT(tight, 0u);
+  EXPECT_LT(double(tight), 0.7 * double(by_box));
+}
+
+TEST(BulletAlgorithms, MeshOnMeshComesToRest) {
+  World world(true);
+  const TriangleMesh terrain = make_terrain(24, 24, 2, 30, 0.4);
+  auto ground = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(terrain), "obb-min");
+  const BoxtreeMeshShape* ground_shape = ground.get();
+  world.add(std::move(ground), 0, btVector3(0, 0, 0));
+  auto rock = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(make_bumpy_sphere(10, 6, 0.3, 5)), "obb-min");
+  rock->setMargin(btScalar(0.02));
+  btRigidBody* body = world.add(std::move(rock), 2, btVector3(15, 15, 4));
+  body->setRollingFriction(btScalar(0.1));
+  int steps_with_contacts = 0;
+  for (int i = 0; i < 400; ++i) {
+    world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+    if (world.contact_points() > 0) ++steps_with_contacts;
+  }
+  const btVector3 p = body->getCenterOfMassPosition();
+  EXPECT_GT(Real(p.z()), terrain_height(ground_shape->tree(), p.x(), p.y()));
+  EXPECT_LT(body->getLinearVelocity().length(), 0.2f);
+  EXPECT_GT(steps_with_contacts, 200);
+
+  // The manifold's points come from the facet pairs the core's tree-vs-tree query finds: each
+  // point lies on the facet its index names (the mesh's facet on body B), and at rest the
+  // meshes are in contact by both accounts.
+  const auto* rock_shape = static_cast<const BoxtreeMeshShape*>(body->getCollisionShape());
+  ASSERT_EQ(world.dispatcher.getNumManifolds(), 1);
+  const btPersistentManifold* m = world.dispatcher.getManifoldByIndexInternal(0);
+  ASSERT_GT(m->getNumContacts(), 0);
+  const bool rock_is_b = m->getBody1() == body;
+  const BoxtreeMeshShape* b_shape = rock_is_b ? rock_shape : ground_shape;
+  const btTransform b_pose = m->getBody1()->getWorldTransform();
+  for (int k = 0; k < m->getNumContacts(); ++k) {
+    const btManifoldPoint& pt = m->getContactPoint(k);
+    btVector3 tri[3];
+    b_shape->scaledTriangle(b_shape->partToFacet(pt.m_partId1, pt.m_index1), tri);
+    const Vec3 local = to_vec3(b_pose.invXform(pt.m_positionWorldOnB));
+    const Vec3 closest = closest_point_on_triangle(local, to_vec3(tri[0]), to_vec3(tri[1]), to_vec3(tri[2]));
+    EXPECT_LT((closest - local).norm(), 1e-4) << "point " << k;
+  }
+  const btTransform pose = body->getWorldTransform();
+  RigidTransform ground_from_rock{to_mat_test(pose.getBasis()), to_vec3(pose.getOrigin())};
+  // Touching within the contact margin: the rock moved down by the margins meets the ground.
+  ground_from_rock.translation.z() -= 0.05;
+  const auto pairs = collide(*ground_shape->tree().get<ObbMin>(), *rock_shape->tree().get<ObbMin>(), ground_from_rock);
+  EXPECT_FALSE(pairs.empty());
+}
+
+// A flat floor of many triangles: a box pushed across it (no friction) must slide without hopping
+// or spinning at the shared edges. Bullet's own shape, without its internal-edge utility, is run
+// alongside as the reference for what bumping looks like.
+struct Slide {
+  float max_up = 0, max_spin = 0, final_x = 0;
+};
+Slide slide_box(int mode) {  // 0: boxtree analytic, 1: boxtree with Bullet's GJK, 2: Bullet's BVH
+  AlgorithmSettings settings;
+  settings.analyticContacts = mode == 0;
+  World world(mode != 2, settings);
+  static const TriangleMesh floor = make_terrain(40, 40, 1, 40, 0);
+  static const BulletMesh bullet_floor(floor);
+  if (mode == 2) {
+    world.add(std::make_unique<btBvhTriangleMeshShape>(bullet_floor.array.get(), true), 0, btVector3(0, 0, 0));
+  } else {
+    world.add(std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(floor), "aabb"), 0, btVector3(0, 0, 0));
+  }
+  btRigidBody* box = world.add(std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.25f)), 1, btVector3(5, 5.3f, 0.26f));
+  box->setFriction(0.0f);
+  for (int i = 0; i < 30; ++i) world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+  box->setLinearVelocity(btVector3(6, 3.5f, 0));
+  box->setActivationState(DISABLE_DEACTIVATION);
+  Slide s;
+  for (int i = 0; i < 240; ++i) {
+    world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+    s.max_up = std::max(s.max_up, float(box->getLinearVelocity().z()));
+    s.max_spin = std::max(s.max_spin, float(box->getAngularVelocity().length()));
+  }
+  s.final_x = float(box->getCenterOfMassPosition().x());
+  return s;
+}
+
+TEST(BulletAlgorithms, SlidingBoxDoesNotBumpOnInternalEdges) {
+  const Slide analytic = slide_box(0), gjk = slide_box(1), bullet = slide_box(2);
+  std::printf("sliding box, max upward speed / max spin: boxtree analytic %.3f / %.3f, boxtree gjk %.3f / %.3f, "
+              "bullet bvh %.3f / %.3f\n",
+              analytic.max_up, analytic.max_spin, gjk.max_up, gjk.max_spin, bullet.max_up, bullet.max_spin);
+  for (const Slide& s : {analytic, gjk}) {
+    EXPECT_GT(s.final_x, 25.0f);  // slid over ~20 cells, ~60 shared edges
+    EXPECT_LT(s.max_up, 0.2f);    // m/s; Bullet's own shape reaches about 2
+    EXPECT_LT(s.max_spin, 1.0f);  // rad/s; Bullet's own shape reaches about 5
+  }
+  EXPECT_LT(analytic.max_up, 0.1f);
+  EXPECT_LT(analytic.max_spin, 0.5f);
+  EXPECT_GT(bullet.max_up, 5 * analytic.max_up);  // the scene does provoke bumps
+}
+
+TEST(BulletAlgorithms, ActiveEdgesOfAFlatGridAreOnlyItsBorder) {
+  const TriangleMesh floor = make_terrain(4, 4, 1, 4, 0);
+  const auto active = compute_active_edges(floor);
+  int active_count = 0;
+  for (auto a : active) active_count += ((a >> 0) & 1) + ((a >> 1) & 1) + ((a >> 2) & 1);
+  EXPECT_EQ(active_count, 16);  // the 4 x 4 border edges
+  const TriangleMesh cube_like = make_uv_sphere(8, 6, 1);
+  const auto sphere_active = compute_active_edges(cube_like);
+  int inactive = 0;
+  for (auto a : sphere_active) inactive += 3 - (((a >> 0) & 1) + ((a >> 1) & 1) + ((a >> 2) & 1));
+  // A coarse sphere is convex everywhere: only the edges inside its flat quads are inactive.
+  EXPECT_LT(inactive, int(cube_like.facet_count()));
+}
+
+TEST(BulletAlgorithms, RegistrationChecksThePoolSize) {
+  btDefaultCollisionConstructionInfo info;
+  info.m_customCollisionAlgorithmMaxElementSize = 16;
+  btDefaultCollisionConfiguration config(info);
+  btCollisionDispatcher dispatcher(&config);
+  if (boxtreeAlgorithmMaxSize() > config.getCollisionAlgorithmPool()->getElementSize()) {
+    EXPECT_THROW(registerBoxtreeAlgorithms(&dispatcher), Error);
+  }
+  EXPECT_THROW(registerBoxtreeAlgorithms(nullptr), Error);
+}
+
+}  // namespace
+}  // namespace boxtree::bullet::test
