@@ -1,0 +1,111 @@
+#pragma once
+// A custom ODE geom class backed by a boxtree: a drop-in replacement for dCreateTriMesh.
+//
+//   dInitODE2(0);
+//   dBoxtreeInit();                                   // after every dInitODE2
+//   dGeomID ground = dCreateBoxtreeMesh(space, mesh, "aabb");   // instead of dCreateTriMesh
+//   ...
+//   dBoxtreeClose();                                  // before (or after) dCloseODE
+//
+// The geom is placeable (static, or attached to a body with dGeomSetBody) and lives in any space.
+// It collides with ODE's sphere, box, capsule, cylinder, ray, plane and convex, with ODE's own
+// trimesh and with other boxtree geoms. Contacts follow ODE's conventions: g1/side1 are this
+// geom and the facet index (the mesh's triangle order), g2/side2 the other geom and -1 (or the
+// other mesh's triangle index); the normal points from g2 into g1; depth >= 0. ODE swaps all of
+// that itself for dCollide(other, mesh).
+//
+// Ownership: the geom holds a boxtree::AnyTree, which shares the (immutable) mesh; the geom
+// frees its tree when destroyed, the mesh lives as long as any tree or caller holds it.
+// Threading: like the rest of ODE, a given geom must not be collided from two threads at once.
+#include <cstdint>
+#include <memory>
+
+#include <ode/ode.h>
+
+#include "boxtree/any_tree.h"
+
+// ---- class registration ----
+
+// Registers the boxtree geom class with ODE and returns its class number. Call it after
+// dInitODE2 (ODE clears its collider table there: a class registered before gets no colliders).
+// Calling it again before dBoxtreeClose returns the same number; dCreateBoxtreeMesh calls it
+// itself if needed. ODE allows at most 4 user classes per session (dMaxUserClasses).
+int dBoxtreeInit();
+// Forgets the class number: call it around dCloseODE, so that the next dBoxtreeInit (after the
+// next dInitODE2) registers the class again. Geoms of the old session must be destroyed first.
+void dBoxtreeClose();
+// The class number, or -1 when not registered.
+int dBoxtreeGetClass();
+
+// ---- creation: the one-line replacement for dCreateTriMesh ----
+
+// `method` is a boxtree method name ("aabb", "obb-min", "pie-min+aabb@3", ...; see boxtree/method.h).
+// Throws boxtree::Error for an invalid mesh or an unknown method (before any ODE object is made).
+dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::TriangleMesh> mesh,
+                           const char* method = "aabb");
+// From a tree built once and shared by many geoms (instances of the same mesh).
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const boxtree::AnyTree& tree);
+// From the arrays dGeomTriMeshDataBuildDouble / dGeomTriMeshDataBuildSingle take (strides in
+// bytes; index_count = 3 * triangles). Unlike ODE, the data is copied: the arrays may be freed.
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const double* vertices, int vertex_stride, int vertex_count,
+                           const dTriIndex* indices, int index_count, int tri_stride, const char* method = "aabb");
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const float* vertices, int vertex_stride, int vertex_count,
+                           const dTriIndex* indices, int index_count, int tri_stride, const char* method = "aabb");
+
+namespace boxtree::ode {
+
+// ---- per-geom settings and access ----
+
+struct GeomSettings {
+  // false (default, like ODE's trimesh and a terrain wants): facets are one-sided, a shape whose
+  // centre is behind a facet is pushed out through its front (counter-clockwise) face. true: out
+  // through whichever side the shape's centre is on (open meshes seen from both sides).
+  bool two_sided = false;
+  // Contacts are also made for shapes within this distance of a facet (reported with depth 0):
+  // speculative contacts that keep fast resting bodies steadier. 0 = touching or penetrating only.
+  Real margin = 0;
+  // Contacts closer than this fraction of the other shape's size (with similar normals) are
+  // merged into the deeper one before the set is cut down to the requested count.
+  Real merge_fraction = 0.01;
+  // Internal edges (boxtree/active_edges.h): a contact on a flat or concave edge between two
+  // facets gets the facet's normal instead of a tilted edge normal, so that bodies rest and slide
+  // over the seams of a mesh without bumps. Edges folding convexly by more than 10 degrees stay.
+  bool internal_edges = true;
+};
+
+bool is_boxtree_geom(dGeomID geom);
+// The geom's tree (nullptr if `geom` is not a boxtree geom). Valid while the geom lives.
+const AnyTree* geom_tree(dGeomID geom);
+// Throws boxtree::Error if `geom` is not a boxtree geom.
+void set_geom_settings(dGeomID geom, const GeomSettings& settings);
+GeomSettings geom_settings(dGeomID geom);
+
+// Work counters of one geom, summed over its collider calls (for benchmarks and tests).
+struct CollisionCounters {
+  std::uint64_t calls = 0;             // collider calls that reached the tree
+  std::uint64_t candidate_facets = 0;  // facets the tree query returned (narrowphase runs)
+  std::uint64_t contacts = 0;          // contacts written to ODE's arrays
+};
+CollisionCounters geom_counters(dGeomID geom);
+void reset_geom_counters(dGeomID geom);
+
+// ---- convex geoms ----
+// ODE has no getter for a dConvex's points, so the collider needs its own copy: register it once
+// per convex geom (the points in the convex's own frame, 3 dReals each, as given to
+// dCreateConvex). A convex without registered points collides with nothing (0 contacts).
+// Each call checks the copy against ODE's AABB of the geom, so a stale entry (a destroyed geom's
+// address reused) is ignored rather than used; still, call forget_convex before dGeomDestroy.
+void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count);
+void forget_convex(dGeomID convex);
+// dCreateConvex + set_convex_points in one call.
+dGeomID create_convex(dSpaceID space, const dReal* planes, unsigned plane_count, const dReal* points,
+                      unsigned point_count, const unsigned* polygons);
+
+// ---- ODE trimeshes as the other geom ----
+// For contacts against ODE's dTriMesh, the adapter reads the trimesh's triangles once
+// (dGeomTriMeshGetTriangle), builds a boxtree of them in the trimesh's frame with this geom's
+// method, and caches it per (dTriMeshDataID, method), checking a few triangles on every call.
+// Drop the cache entry after changing or destroying the data.
+void forget_trimesh_data(dTriMeshDataID data);
+
+}  // namespace boxtree::ode

@@ -1,0 +1,342 @@
+// The boxtree geom class: registration with ODE, creation, the world AABB, and the registries the
+// colliders read (convex points, trees of ODE trimeshes).
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+
+#include "boxtree/active_edges.h"
+#include "boxtree/error.h"
+#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/obb.h"
+#include "internal.h"
+
+namespace boxtree::ode::detail {
+namespace {
+
+// ODE's registration is process-global, so the class number is too. Guarded, since ODE programs
+// may create geoms from several threads (ODE itself does not lock dCreateGeomClass).
+std::mutex g_class_mutex;
+std::atomic<int> g_class{-1};  // read lock-free by object_of on every collider call
+
+GeomObject*& slot_of(dGeomID geom) { return *static_cast<GeomObject**>(dGeomGetClassData(geom)); }
+
+// World AABB: the local bounds' box turned by the pose (|R| times the half extents bounds the
+// turned box tightly), so it follows the body. Layout {minx,maxx, miny,maxy, minz,maxz}.
+void class_aabb(dGeomID geom, dReal aabb[6]) {
+  const GeomObject* object = slot_of(geom);
+  const RigidTransform pose = pose_of(geom);
+  const Vec3 center = pose.apply(object->local_bounds.center());
+  const Vec3 half = pose.rotation.cwiseAbs() * (object->local_bounds.extent() * Real(0.5));
+  // The speculative margin widens the box so that spaces pair shapes within it too.
+  const Vec3 widen = half + Vec3::Constant(object->settings.margin);
+  for (int i = 0; i < 3; ++i) {
+    aabb[2 * i] = center[i] - widen[i];
+    aabb[2 * i + 1] = center[i] + widen[i];
+  }
+}
+
+// Called by spaces only, after the plain AABB overlap passed: the other geom's world AABB seen
+// in this geom's frame (an oriented box) against the mesh's local bounds. Cheaper than a tree
+// query and removes the diagonal misses of a rotated mesh's world AABB.
+int class_aabb_test(dGeomID self, dGeomID /*other*/, dReal aabb[6]) {
+  for (int i = 0; i < 6; ++i)
+    if (!std::isfinite(aabb[i])) return 1;  // planes and other infinite geoms: let the collider decide
+  const GeomObject* object = slot_of(self);
+  const RigidTransform mesh_from_world = pose_of(self).inverse();
+  Obb box;
+  const Vec3 lo(aabb[0], aabb[2], aabb[4]);
+  const Vec3 hi(aabb[1], aabb[3], aabb[5]);
+  box.center = mesh_from_world.apply((lo + hi) * Real(0.5));
+  box.axes = mesh_from_world.rotation;
+  box.half_extents = (hi - lo) * Real(0.5) + Vec3::Constant(object->settings.margin);
+  return overlaps(object->local_bounds, box) ? 1 : 0;
+}
+
+void class_dtor(dGeomID geom) {
+  GeomObject*& slot = slot_of(geom);
+  delete slot;
+  slot = nullptr;
+}
+
+dColliderFn* class_collider(int other_class) { return collider_for(other_class); }
+
+dGeomID create_geom(dSpaceID space, AnyTree tree) {
+  if (tree.empty()) throw Error("dCreateBoxtreeMesh: the tree is empty");
+  auto object = std::make_unique<GeomObject>();
+  object->local_bounds = tree.bounds();
+  object->active_edges = compute_active_edges(tree.mesh());
+  object->tree = std::move(tree);
+  const int class_number = dBoxtreeInit();
+  dGeomID geom = dCreateGeom(class_number);
+  slot_of(geom) = object.release();
+  if (space) dSpaceAdd(space, geom);
+  return geom;
+}
+
+template <class Scalar>
+std::shared_ptr<const TriangleMesh> mesh_from_arrays(const Scalar* vertices, int vertex_stride, int vertex_count,
+                                                     const dTriIndex* indices, int index_count, int tri_stride) {
+  if (!vertices || !indices || vertex_count <= 0 || index_count <= 0 || index_count % 3 != 0 ||
+      vertex_stride < int(3 * sizeof(Scalar)) || tri_stride < int(3 * sizeof(dTriIndex))) {
+    throw Error("dCreateBoxtreeMesh: bad vertex/index arrays (need vertex_stride >= 3 coordinates, "
+                "tri_stride >= 3 indices, index_count a positive multiple of 3)");
+  }
+  auto mesh = std::make_shared<TriangleMesh>();
+  mesh->vertices.reserve(std::size_t(vertex_count));
+  const auto* vertex_bytes = reinterpret_cast<const unsigned char*>(vertices);
+  for (int i = 0; i < vertex_count; ++i) {
+    const auto* v = reinterpret_cast<const Scalar*>(vertex_bytes + std::size_t(i) * std::size_t(vertex_stride));
+    mesh->vertices.emplace_back(Real(v[0]), Real(v[1]), Real(v[2]));
+  }
+  const auto* index_bytes = reinterpret_cast<const unsigned char*>(indices);
+  for (int t = 0; t < index_count / 3; ++t) {
+    const auto* tri = reinterpret_cast<const dTriIndex*>(index_bytes + std::size_t(t) * std::size_t(tri_stride));
+    mesh->triangles.push_back({VertexId(tri[0]), VertexId(tri[1]), VertexId(tri[2])});
+  }
+  return mesh;
+}
+
+// ---- convex registry ----
+std::mutex g_convex_mutex;
+std::unordered_map<dGeomID, std::vector<Vec3>> g_convex_points;
+
+// ---- ODE trimesh trees ----
+using TrimeshKey = std::tuple<dTriMeshDataID, int /*kind*/, int /*hybrid level*/>;
+std::mutex g_trimesh_mutex;
+std::map<TrimeshKey, std::shared_ptr<const TrimeshTree>> g_trimesh_trees;
+
+// Triangle i of an ODE trimesh in the trimesh's own frame.
+void trimesh_triangle(dGeomID trimesh, int i, const RigidTransform& local_from_world, Vec3 out[3]) {
+  dVector3 v[3];
+  dGeomTriMeshGetTriangle(trimesh, i, &v[0], &v[1], &v[2]);
+  for (int k = 0; k < 3; ++k) out[k] = local_from_world.apply(Vec3(v[k][0], v[k][1], v[k][2]));
+}
+
+// The cached tree still describes this trimesh: same count, and the first, middle and last
+// triangles agree (catches data replaced in place or a freed data id reused).
+bool trimesh_entry_matches(const TrimeshTree& entry, dGeomID trimesh, const RigidTransform& local_from_world) {
+  const int count = dGeomTriMeshGetTriangleCount(trimesh);
+  if (count != entry.triangle_count || count == 0) return false;
+  const TriangleMesh& mesh = entry.tree.mesh();
+  const Real scale = 1 + mesh.vertices.front().cwiseAbs().maxCoeff();
+  for (int i : {0, count / 2, count - 1}) {
+    Vec3 corners[3];
+    trimesh_triangle(trimesh, i, local_from_world, corners);
+    for (int k = 0; k < 3; ++k)
+      if ((corners[k] - mesh.corner(FacetId(i), k)).cwiseAbs().maxCoeff() > 1e-6 * scale) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+GeomObject* object_of(dGeomID geom) {
+  if (!geom || g_class < 0 || dGeomGetClass(geom) != g_class) return nullptr;
+  return slot_of(geom);
+}
+
+RigidTransform pose_of(dGeomID geom) {
+  const dReal* p = dGeomGetPosition(geom);
+  const dReal* r = dGeomGetRotation(geom);  // dMatrix3: 3 rows of 4, the 4th column is padding
+  RigidTransform pose;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) pose.rotation(row, col) = r[row * 4 + col];
+  pose.translation = Vec3(p[0], p[1], p[2]);
+  return pose;
+}
+
+bool convex_points(dGeomID convex, std::vector<Vec3>& points_in_convex_frame) {
+  {
+    std::lock_guard<std::mutex> lock(g_convex_mutex);
+    auto it = g_convex_points.find(convex);
+    if (it == g_convex_points.end()) return false;
+    points_in_convex_frame = it->second;
+  }
+  // ODE's AABB of a convex is exactly the box of its turned points (dxConvex::computeAABB), so
+  // ours must agree with it; a mismatch means the entry belongs to another (destroyed) geom.
+  dReal ode_box[6];
+  dGeomGetAABB(convex, ode_box);
+  const RigidTransform pose = pose_of(convex);
+  Aabb box = Aabb::empty();
+  for (const Vec3& p : points_in_convex_frame) box.expand(pose.apply(p));
+  const Real tolerance = 1e-7 * (1 + box.max.cwiseAbs().maxCoeff() + box.min.cwiseAbs().maxCoeff());
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(box.min[i] - ode_box[2 * i]) > tolerance || std::abs(box.max[i] - ode_box[2 * i + 1]) > tolerance)
+      return false;
+  }
+  return true;
+}
+
+std::shared_ptr<const TrimeshTree> trimesh_tree(dGeomID trimesh, const Method& method) {
+  const dTriMeshDataID data = dGeomTriMeshGetData(trimesh);
+  const RigidTransform local_from_world = pose_of(trimesh).inverse();
+  const TrimeshKey key{data, int(method.kind), method.hybrid_level};
+  {
+    std::lock_guard<std::mutex> lock(g_trimesh_mutex);
+    auto it = g_trimesh_trees.find(key);
+    if (it != g_trimesh_trees.end() && trimesh_entry_matches(*it->second, trimesh, local_from_world))
+      return it->second;
+  }
+  const int count = dGeomTriMeshGetTriangleCount(trimesh);
+  if (count <= 0) return nullptr;
+  // Unshared corners (3 per facet) keep facet ids equal to ODE's triangle indices.
+  auto mesh = std::make_shared<TriangleMesh>();
+  mesh->vertices.reserve(std::size_t(count) * 3);
+  mesh->triangles.reserve(std::size_t(count));
+  for (int i = 0; i < count; ++i) {
+    Vec3 corners[3];
+    trimesh_triangle(trimesh, i, local_from_world, corners);
+    const auto base = VertexId(mesh->vertices.size());
+    for (const Vec3& c : corners) mesh->vertices.push_back(c);
+    mesh->triangles.push_back({base, base + 1, base + 2});
+  }
+  auto entry = std::make_shared<TrimeshTree>();
+  try {
+    entry->tree = AnyTree::build(std::move(mesh), method);
+  } catch (const Error&) {
+    return nullptr;  // e.g. NaN vertices: ODE would not collide such a mesh sensibly either
+  }
+  entry->bounds = entry->tree.bounds();
+  entry->active_edges = compute_active_edges(entry->tree.mesh());
+  entry->triangle_count = count;
+  std::lock_guard<std::mutex> lock(g_trimesh_mutex);
+  g_trimesh_trees[key] = entry;
+  return entry;
+}
+
+}  // namespace boxtree::ode::detail
+
+using boxtree::ode::detail::g_class;
+using boxtree::ode::detail::g_class_mutex;
+
+int dBoxtreeInit() {
+  std::lock_guard<std::mutex> lock(g_class_mutex);
+  if (g_class >= 0) return g_class.load();
+  dGeomClass geom_class{};
+  geom_class.bytes = int(sizeof(boxtree::ode::detail::GeomObject*));
+  geom_class.collider = &boxtree::ode::detail::class_collider;
+  geom_class.aabb = &boxtree::ode::detail::class_aabb;
+  geom_class.aabb_test = &boxtree::ode::detail::class_aabb_test;
+  geom_class.dtor = &boxtree::ode::detail::class_dtor;
+  g_class = dCreateGeomClass(&geom_class);
+  return g_class.load();
+}
+
+void dBoxtreeClose() {
+  std::lock_guard<std::mutex> lock(g_class_mutex);
+  g_class = -1;
+}
+
+int dBoxtreeGetClass() {
+  return g_class.load();
+}
+
+dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::TriangleMesh> mesh, const char* method) {
+  if (!mesh) throw boxtree::Error("dCreateBoxtreeMesh: no mesh");
+  const boxtree::Method parsed = boxtree::parse_method(method ? method : "aabb");
+  return boxtree::ode::detail::create_geom(space, boxtree::AnyTree::build(std::move(mesh), parsed));
+}
+
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const boxtree::AnyTree& tree) {
+  return boxtree::ode::detail::create_geom(space, tree);
+}
+
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const double* vertices, int vertex_stride, int vertex_count,
+                           const dTriIndex* indices, int index_count, int tri_stride, const char* method) {
+  return dCreateBoxtreeMesh(space,
+                            boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices,
+                                                                   index_count, tri_stride),
+                            method);
+}
+
+dGeomID dCreateBoxtreeMesh(dSpaceID space, const float* vertices, int vertex_stride, int vertex_count,
+                           const dTriIndex* indices, int index_count, int tri_stride, const char* method) {
+  return dCreateBoxtreeMesh(space,
+                            boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices,
+                                                                   index_count, tri_stride),
+                            method);
+}
+
+namespace boxtree::ode {
+
+bool is_boxtree_geom(dGeomID geom) { return detail::object_of(geom) != nullptr; }
+
+const AnyTree* geom_tree(dGeomID geom) {
+  const detail::GeomObject* object = detail::object_of(geom);
+  return object ? &object->tree : nullptr;
+}
+
+namespace {
+detail::GeomObject& checked_object(dGeomID geom, const char* caller) {
+  detail::GeomObject* object = detail::object_of(geom);
+  if (!object) throw Error(std::string(caller) + ": not a boxtree geom");
+  return *object;
+}
+}  // namespace
+
+void set_geom_settings(dGeomID geom, const GeomSettings& settings) {
+  detail::GeomObject& object = checked_object(geom, "boxtree::ode::set_geom_settings");
+  if (!(settings.margin >= 0) || !(settings.merge_fraction >= 0))
+    throw Error("boxtree::ode::set_geom_settings: margin and merge_fraction must be >= 0");
+  const bool margin_changed = object.settings.margin != settings.margin;
+  object.settings = settings;
+  // The AABB depends on the margin: mark it dirty (dGeomMoved is not public; setting the same
+  // position does it).
+  if (margin_changed) {
+    const dReal* p = dGeomGetPosition(geom);
+    dGeomSetPosition(geom, p[0], p[1], p[2]);
+  }
+}
+
+GeomSettings geom_settings(dGeomID geom) { return checked_object(geom, "boxtree::ode::geom_settings").settings; }
+
+CollisionCounters geom_counters(dGeomID geom) {
+  const detail::GeomObject& object = checked_object(geom, "boxtree::ode::geom_counters");
+  return {object.calls.load(), object.candidate_facets.load(), object.contacts.load()};
+}
+
+void reset_geom_counters(dGeomID geom) {
+  detail::GeomObject& object = checked_object(geom, "boxtree::ode::reset_geom_counters");
+  object.calls = 0;
+  object.candidate_facets = 0;
+  object.contacts = 0;
+}
+
+void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count) {
+  if (!convex || dGeomGetClass(convex) != dConvexClass)
+    throw Error("boxtree::ode::set_convex_points: not a dConvex geom");
+  if (!points || point_count == 0) throw Error("boxtree::ode::set_convex_points: no points");
+  std::vector<Vec3> copy;
+  copy.reserve(point_count);
+  for (unsigned i = 0; i < point_count; ++i) copy.emplace_back(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+  std::lock_guard<std::mutex> lock(detail::g_convex_mutex);
+  detail::g_convex_points[convex] = std::move(copy);
+}
+
+void forget_convex(dGeomID convex) {
+  std::lock_guard<std::mutex> lock(detail::g_convex_mutex);
+  detail::g_convex_points.erase(convex);
+}
+
+dGeomID create_convex(dSpaceID space, const dReal* planes, unsigned plane_count, const dReal* points,
+                      unsigned point_count, const unsigned* polygons) {
+  dGeomID convex = dCreateConvex(space, planes, plane_count, points, point_count, polygons);
+  set_convex_points(convex, points, point_count);
+  return convex;
+}
+
+void forget_trimesh_data(dTriMeshDataID data) {
+  std::lock_guard<std::mutex> lock(detail::g_trimesh_mutex);
+  for (auto it = detail::g_trimesh_trees.begin(); it != detail::g_trimesh_trees.end();) {
+    if (std::get<0>(it->first) == data)
+      it = detail::g_trimesh_trees.erase(it);
+    else
+      ++it;
+  }
+}
+
+}  // namespace boxtree::ode

@@ -1,0 +1,249 @@
+#pragma once
+// The drop scene, built twice: a procedural terrain as ODE's own dTriMesh in one world and as the
+// boxtree geom in another, the same bodies dropped onto both. Shared by the scene tests and the
+// timing report (test_drop.cpp).
+#include <ode/ode.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "boxtree/generate.h"
+#include "boxtree/ode/boxtree_geom.h"
+
+namespace boxtree::ode_test {
+
+// A terrain of 40 x 40 cells (3200 facets) over 40 x 40 units, heights within about 0..4: slopes
+// gentle enough that the bodies below stay where they land (with the rolling friction below).
+inline std::shared_ptr<const TriangleMesh> scene_terrain() {
+  static const auto terrain = std::make_shared<const TriangleMesh>(make_terrain(40, 40, 7, 40, 4));
+  return terrain;
+}
+
+// ODE's own trimesh over the same vertices (double precision arrays; OPCODE keeps floats inside).
+// The arrays must outlive the data object, since ODE does not copy them.
+struct OdeTrimesh {
+  std::vector<dReal> vertices;
+  std::vector<dTriIndex> indices;
+  dTriMeshDataID data = nullptr;
+  dGeomID geom = nullptr;
+
+  OdeTrimesh(dSpaceID space, const TriangleMesh& mesh) {
+    for (const Vec3& v : mesh.vertices)
+      for (int k = 0; k < 3; ++k) vertices.push_back(v[k]);
+    for (const Triangle& t : mesh.triangles)
+      for (VertexId v : t) indices.push_back(dTriIndex(v));
+    data = dGeomTriMeshDataCreate();
+    dGeomTriMeshDataBuildDouble(data, vertices.data(), 3 * int(sizeof(dReal)), int(mesh.vertices.size()),
+                                indices.data(), int(indices.size()), 3 * int(sizeof(dTriIndex)));
+    // ODE's convex-vs-trimesh needs the face angles (it aborts without them).
+    dGeomTriMeshDataPreprocess2(data, 1U << dTRIDATAPREPROCESS_BUILD_FACE_ANGLES, nullptr);
+    geom = dCreateTriMesh(space, data, nullptr, nullptr, nullptr);
+  }
+  ~OdeTrimesh() {
+    if (geom) dGeomDestroy(geom);
+    if (data) dGeomTriMeshDataDestroy(data);
+  }
+  OdeTrimesh(const OdeTrimesh&) = delete;
+  OdeTrimesh& operator=(const OdeTrimesh&) = delete;
+};
+
+enum class BodyKind { sphere, box, capsule, cylinder };
+inline const char* kind_name(BodyKind kind) {
+  switch (kind) {
+    case BodyKind::sphere: return "sphere";
+    case BodyKind::box: return "box";
+    case BodyKind::capsule: return "capsule";
+    case BodyKind::cylinder: return "cylinder";
+  }
+  return "?";
+}
+
+struct Drop {
+  BodyKind kind;
+  Vec3 position;
+};
+
+// Per step: contacts made and the time spent inside dCollide (the collision work proper; the
+// space's broadphase is the same in both worlds).
+struct StepRecord {
+  int contacts = 0;
+  int pairs = 0;
+  double collide_seconds = 0;
+};
+
+enum class Ground { ode_trimesh, boxtree };
+
+class DropWorld {
+ public:
+  static constexpr int kMaxContacts = 16;  // asked per pair, like a typical near callback
+
+  DropWorld(Ground ground, const std::vector<Drop>& drops, const char* method = "aabb") : ground_kind_(ground) {
+    world_ = dWorldCreate();
+    space_ = dHashSpaceCreate(nullptr);
+    joints_ = dJointGroupCreate(0);
+    dWorldSetGravity(world_, 0, 0, -9.81);
+    dWorldSetQuickStepNumIterations(world_, 30);
+    dWorldSetContactSurfaceLayer(world_, 0.001);
+    dWorldSetContactMaxCorrectingVel(world_, 2.0);
+    dWorldSetAngularDamping(world_, 0.01);
+    const auto terrain = scene_terrain();
+    if (ground == Ground::boxtree) {
+      ground_ = dCreateBoxtreeMesh(space_, terrain, method);
+    } else {
+      ode_ground_ = std::make_unique<OdeTrimesh>(space_, *terrain);
+      ground_ = ode_ground_->geom;
+    }
+    for (const Drop& d : drops) add_body(d);
+  }
+  ~DropWorld() {
+    for (dGeomID g : geoms_) dGeomDestroy(g);
+    if (ground_kind_ == Ground::boxtree) dGeomDestroy(ground_);
+    ode_ground_.reset();
+    dJointGroupDestroy(joints_);
+    dSpaceDestroy(space_);
+    dWorldDestroy(world_);
+  }
+  DropWorld(const DropWorld&) = delete;
+  DropWorld& operator=(const DropWorld&) = delete;
+
+  StepRecord step(dReal dt = 0.01) {
+    record_ = {};
+    dSpaceCollide(space_, this, &DropWorld::near_callback);
+    dWorldQuickStep(world_, dt);
+    dJointGroupEmpty(joints_);
+    return record_;
+  }
+
+  const std::vector<dBodyID>& bodies() const { return bodies_; }
+  const std::vector<dGeomID>& geoms() const { return geoms_; }
+  dGeomID ground() const { return ground_; }
+  dSpaceID space() const { return space_; }
+  dWorldID world() const { return world_; }
+
+  // The lowest point of a body's shape (its support point along -z): what rests on the ground.
+  Real lowest_z(std::size_t i) const {
+    dGeomID g = geoms_[i];
+    const dReal* p = dBodyGetPosition(bodies_[i]);
+    const dReal* r = dBodyGetRotation(bodies_[i]);
+    // Row 2 of R: the body axes' z components.
+    const Vec3 zrow(r[8], r[9], r[10]);
+    switch (dGeomGetClass(g)) {
+      case dSphereClass: return p[2] - dGeomSphereGetRadius(g);
+      case dBoxClass: {
+        dVector3 l;
+        dGeomBoxGetLengths(g, l);
+        return p[2] - 0.5 * (std::abs(zrow[0]) * l[0] + std::abs(zrow[1]) * l[1] + std::abs(zrow[2]) * l[2]);
+      }
+      case dCapsuleClass: {
+        dReal radius, length;
+        dGeomCapsuleGetParams(g, &radius, &length);
+        return p[2] - radius - 0.5 * length * std::abs(zrow[2]);
+      }
+      case dCylinderClass: {
+        dReal radius, length;
+        dGeomCylinderGetParams(g, &radius, &length);
+        const Real axis_z = std::abs(zrow[2]);
+        return p[2] - 0.5 * length * axis_z - radius * std::sqrt(std::max(Real(0), 1 - axis_z * axis_z));
+      }
+      default: return p[2];
+    }
+  }
+
+ private:
+  static void near_callback(void* self_ptr, dGeomID a, dGeomID b) {
+    auto* self = static_cast<DropWorld*>(self_ptr);
+    dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
+    if (ba && bb && dAreConnectedExcluding(ba, bb, dJointTypeContact)) return;
+    dContact contacts[kMaxContacts];
+    const auto start = std::chrono::steady_clock::now();
+    const int n = dCollide(a, b, kMaxContacts, &contacts[0].geom, sizeof(dContact));
+    self->record_.collide_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (n > 0) ++self->record_.pairs;
+    self->record_.contacts += n;
+    for (int i = 0; i < n; ++i) {
+      dContact& c = contacts[i];
+      c.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactRolling;
+      c.surface.mu = 1.0;
+      c.surface.soft_erp = 0.4;
+      c.surface.soft_cfm = 1e-5;
+      // Rolling friction: without it a sphere on any slope rolls forever, and the two worlds
+      // would be compared at different places rather than at rest.
+      c.surface.rho = 0.3;
+      c.surface.rho2 = 0.3;
+      c.surface.rhoN = 0.05;
+      dJointID j = dJointCreateContact(self->world_, self->joints_, &c);
+      dJointAttach(j, ba, bb);
+    }
+  }
+
+  void add_body(const Drop& d) {
+    dBodyID body = dBodyCreate(world_);
+    dMass mass;
+    dGeomID geom = nullptr;
+    dMatrix3 rotation;
+    dRSetIdentity(rotation);
+    switch (d.kind) {
+      case BodyKind::sphere:
+        geom = dCreateSphere(space_, 0.5);
+        dMassSetSphere(&mass, 1000, 0.5);
+        break;
+      case BodyKind::box:
+        geom = dCreateBox(space_, 1.0, 0.8, 0.6);
+        dMassSetBox(&mass, 1000, 1.0, 0.8, 0.6);
+        break;
+      case BodyKind::capsule:  // lying down: axis along x
+        geom = dCreateCapsule(space_, 0.3, 1.0);
+        dMassSetCapsule(&mass, 1000, 3, 0.3, 1.0);
+        dRFromAxisAndAngle(rotation, 0, 1, 0, M_PI / 2);
+        break;
+      case BodyKind::cylinder:  // standing on a flat end
+        geom = dCreateCylinder(space_, 0.4, 0.6);
+        dMassSetCylinder(&mass, 1000, 3, 0.4, 0.6);
+        break;
+    }
+    dBodySetMass(body, &mass);
+    dBodySetPosition(body, d.position.x(), d.position.y(), d.position.z());
+    dBodySetRotation(body, rotation);
+    dGeomSetBody(geom, body);
+    bodies_.push_back(body);
+    geoms_.push_back(geom);
+  }
+
+  Ground ground_kind_;
+  dWorldID world_ = nullptr;
+  dSpaceID space_ = nullptr;
+  dJointGroupID joints_ = nullptr;
+  dGeomID ground_ = nullptr;
+  std::unique_ptr<OdeTrimesh> ode_ground_;
+  std::vector<dBodyID> bodies_;
+  std::vector<dGeomID> geoms_;
+  StepRecord record_;
+};
+
+// Terrain height under (x, y): the closest hit of a vertical ray on the boxtree of the terrain.
+inline Real terrain_height(const AnyTree& tree, Real x, Real y) {
+  const auto hit = tree.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
+  return hit ? 1000 - hit->t : -1e9;
+}
+
+// Four of each kind on a grid over the terrain's interior, 1 unit above the highest ground
+// under their footprint.
+inline std::vector<Drop> scene_drops(const AnyTree& tree) {
+  std::vector<Drop> drops;
+  const BodyKind kinds[] = {BodyKind::sphere, BodyKind::box, BodyKind::capsule, BodyKind::cylinder};
+  int index = 0;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i, ++index) {
+      const Real x = 8 + 8 * i, y = 8 + 8 * j;
+      Real ground = -1e9;
+      for (Real dx : {-0.7, 0.0, 0.7})
+        for (Real dy : {-0.7, 0.0, 0.7}) ground = std::max(ground, terrain_height(tree, x + dx, y + dy));
+      drops.push_back({kinds[index % 4], Vec3(x, y, ground + 1.0)});
+    }
+  return drops;
+}
+
+}  // namespace boxtree::ode_test

@@ -1,0 +1,556 @@
+// The boxtree geom's contract with ODE: registration, AABB, the contact conventions of every
+// collider (checked against ODE's own trimesh on the same triangles where ODE has a collider),
+// the contact array protocol (max count, skip stride, CONTACTS_UNIMPORTANT), and rays.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "boxtree/generate.h"
+#include "boxtree/ode/boxtree_geom.h"
+#include "ode_scene.h"
+
+namespace boxtree::ode_test {
+namespace {
+
+// A flat grid over [-half, half]^2 at z = 0, counter-clockwise seen from above (normal +z).
+std::shared_ptr<const TriangleMesh> flat_grid(int cells, Real half) {
+  auto mesh = std::make_shared<TriangleMesh>();
+  for (int j = 0; j <= cells; ++j)
+    for (int i = 0; i <= cells; ++i)
+      mesh->vertices.emplace_back(-half + 2 * half * i / cells, -half + 2 * half * j / cells, 0);
+  auto id = [&](int i, int j) { return VertexId(j * (cells + 1) + i); };
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i) {
+      mesh->triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh->triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return mesh;
+}
+
+// A closed axis-aligned box mesh (outward CCW faces), 12 facets.
+std::shared_ptr<const TriangleMesh> box_mesh(const Vec3& half) {
+  auto mesh = std::make_shared<TriangleMesh>();
+  for (int k = 0; k < 8; ++k)
+    mesh->vertices.emplace_back((k & 1) ? half.x() : -half.x(), (k & 2) ? half.y() : -half.y(),
+                                (k & 4) ? half.z() : -half.z());
+  const Triangle faces[12] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                              {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const Triangle& t : faces) mesh->triangles.push_back(t);
+  return mesh;
+}
+
+Vec3 normal_of(const dContactGeom& c) { return Vec3(c.normal[0], c.normal[1], c.normal[2]); }
+Vec3 pos_of(const dContactGeom& c) { return Vec3(c.pos[0], c.pos[1], c.pos[2]); }
+
+int collide(dGeomID a, dGeomID b, std::vector<dContactGeom>& out, int max = 32, int flags_extra = 0) {
+  out.assign(std::size_t(max), dContactGeom{});
+  const int n = dCollide(a, b, max | flags_extra, out.data(), sizeof(dContactGeom));
+  out.resize(std::size_t(std::max(n, 0)));
+  return n;
+}
+
+const dContactGeom& deepest(const std::vector<dContactGeom>& contacts) {
+  return *std::max_element(contacts.begin(), contacts.end(),
+                           [](const dContactGeom& x, const dContactGeom& y) { return x.depth < y.depth; });
+}
+
+// Each test owns its space and geoms.
+struct Space {
+  dSpaceID id = dSimpleSpaceCreate(nullptr);
+  ~Space() { dSpaceDestroy(id); }  // destroys the geoms still in it (cleanup mode on by default)
+};
+
+TEST(OdeGeom, RegisteredAfterInitAndRecognised) {
+  ASSERT_GE(dBoxtreeGetClass(), int(dFirstUserClass));
+  EXPECT_EQ(dBoxtreeInit(), dBoxtreeGetClass());  // idempotent within one ODE session
+  Space space;
+  dGeomID g = dCreateBoxtreeMesh(space.id, flat_grid(4, 1), "obb-min");
+  EXPECT_EQ(dGeomGetClass(g), dBoxtreeGetClass());
+  EXPECT_TRUE(boxtree::ode::is_boxtree_geom(g));
+  ASSERT_NE(boxtree::ode::geom_tree(g), nullptr);
+  EXPECT_EQ(boxtree::ode::geom_tree(g)->facet_count(), 32u);
+  EXPECT_EQ(method_name(boxtree::ode::geom_tree(g)->method()), "obb-min");
+  dGeomID sphere = dCreateSphere(space.id, 1);
+  EXPECT_FALSE(boxtree::ode::is_boxtree_geom(sphere));
+  EXPECT_EQ(boxtree::ode::geom_tree(sphere), nullptr);
+  EXPECT_THROW(dCreateBoxtreeMesh(space.id, flat_grid(2, 1), "no-such-method"), Error);
+  EXPECT_THROW(dCreateBoxtreeMesh(space.id, std::make_shared<const TriangleMesh>(), "aabb"), Error);
+}
+
+TEST(OdeGeom, ArraysLikeTriMeshDataBuild) {
+  const auto grid = flat_grid(3, 2);
+  std::vector<double> vd;
+  std::vector<float> vf;
+  // Strided vertices (4 coordinates, like dVector3) and strided triangles (4 indices).
+  for (const Vec3& v : grid->vertices) {
+    for (int k = 0; k < 3; ++k) {
+      vd.push_back(v[k]);
+      vf.push_back(float(v[k]));
+    }
+    vd.push_back(0);
+    vf.push_back(0);
+  }
+  std::vector<dTriIndex> indices;
+  for (const Triangle& t : grid->triangles) {
+    for (VertexId v : t) indices.push_back(v);
+    indices.push_back(12345);
+  }
+  Space space;
+  dGeomID gd = dCreateBoxtreeMesh(space.id, vd.data(), 4 * sizeof(double), int(grid->vertices.size()), indices.data(),
+                                  int(grid->triangles.size() * 3), 4 * sizeof(dTriIndex));
+  dGeomID gf = dCreateBoxtreeMesh(space.id, vf.data(), 4 * sizeof(float), int(grid->vertices.size()), indices.data(),
+                                  int(grid->triangles.size() * 3), 4 * sizeof(dTriIndex), "pie-min");
+  for (dGeomID g : {gd, gf}) {
+    const TriangleMesh& m = boxtree::ode::geom_tree(g)->mesh();
+    ASSERT_EQ(m.triangles.size(), grid->triangles.size());
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_LT((m.corner(FacetId(f), k) - grid->corner(FacetId(f), k)).norm(), 1e-6);
+  }
+  EXPECT_THROW(dCreateBoxtreeMesh(space.id, vd.data(), 4 * sizeof(double), 4, indices.data(), 4, 16), Error);
+}
+
+TEST(OdeGeom, AabbFollowsTheBodyPose) {
+  dWorldID world = dWorldCreate();
+  Space space;
+  const auto mesh = std::make_shared<const TriangleMesh>(make_bumpy_sphere(16, 8, 0.3, 5));
+  dGeomID g = dCreateBoxtreeMesh(space.id, mesh, "aabb");
+  dBodyID body = dBodyCreate(world);
+  dGeomSetBody(g, body);
+  Random random(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec3 p = random.uniform_vec3(-50, 50);
+    const Vec3 axis = random.unit_vector();
+    dMatrix3 r;
+    dRFromAxisAndAngle(r, axis.x(), axis.y(), axis.z(), random.uniform(-3, 3));
+    dBodySetPosition(body, p.x(), p.y(), p.z());
+    dBodySetRotation(body, r);
+    dReal box[6];
+    dGeomGetAABB(g, box);
+    const dReal* rot = dGeomGetRotation(g);
+    Vec3 lo = Vec3::Constant(1e30), hi = Vec3::Constant(-1e30);
+    for (const Vec3& v : mesh->vertices) {
+      Vec3 w;
+      for (int row = 0; row < 3; ++row)
+        w[row] = rot[row * 4] * v.x() + rot[row * 4 + 1] * v.y() + rot[row * 4 + 2] * v.z() + p[row];
+      lo = lo.cwiseMin(w);
+      hi = hi.cwiseMax(w);
+    }
+    // Contains every vertex; no looser than the turned local box (at most sqrt(3) wider).
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_LE(box[2 * i], lo[i] + 1e-9);
+      EXPECT_GE(box[2 * i + 1], hi[i] - 1e-9);
+      EXPECT_LE(box[2 * i + 1] - box[2 * i], (hi[i] - lo[i]) * 1.8 + 1e-9);
+    }
+  }
+  dGeomDestroy(g);
+  dBodyDestroy(body);
+  dWorldDestroy(world);
+}
+
+// A sphere in front of the faces: the same contact from the boxtree geom and from ODE's trimesh
+// (ODE: normal = -face normal with the mesh as g1), and ODE's swap for dCollide(sphere, mesh).
+TEST(OdeGeom, SphereNormalDirectionAndSidesMatchOdeTrimesh) {
+  Space space;
+  const auto grid = flat_grid(8, 4);
+  OdeTrimesh ode_mesh(space.id, *grid);
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, grid, "aabb");
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  // Over the incentre of facet 2 * (4 + 4 * 8) = 72 (cell [0,1]^2, the triangle below its
+  // diagonal), touching no other facet: both colliders give exactly that one contact.
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.25);
+  std::vector<dContactGeom> ours, theirs;
+  ASSERT_EQ(collide(mesh, sphere, ours), 1);
+  ASSERT_EQ(collide(ode_mesh.geom, sphere, theirs), 1);
+  EXPECT_EQ(ours[0].g1, mesh);
+  EXPECT_EQ(ours[0].g2, sphere);
+  EXPECT_EQ(ours[0].side2, -1);
+  EXPECT_EQ(ours[0].side1, 72);
+  EXPECT_EQ(ours[0].side1, theirs[0].side1);
+  EXPECT_NEAR(ours[0].depth, 0.05, 1e-12);
+  EXPECT_NEAR(ours[0].depth, theirs[0].depth, 1e-6);
+  EXPECT_LT((normal_of(ours[0]) - Vec3(0, 0, -1)).norm(), 1e-12);
+  EXPECT_LT((normal_of(ours[0]) - normal_of(theirs[0])).norm(), 1e-6);
+  EXPECT_LT((pos_of(ours[0]) - pos_of(theirs[0])).norm(), 1e-5);
+  EXPECT_EQ(ours[0].pos[3], 0);
+  EXPECT_EQ(ours[0].normal[3], 0);
+
+  // The reverse order: ODE negates the normal and swaps g and side.
+  ASSERT_EQ(collide(sphere, mesh, ours), 1);
+  ASSERT_EQ(collide(sphere, ode_mesh.geom, theirs), 1);
+  EXPECT_EQ(ours[0].g1, sphere);
+  EXPECT_EQ(ours[0].g2, mesh);
+  EXPECT_EQ(ours[0].side1, -1);
+  EXPECT_EQ(ours[0].side2, theirs[0].side2);
+  EXPECT_LT((normal_of(ours[0]) - Vec3(0, 0, 1)).norm(), 1e-12);
+  EXPECT_LT((normal_of(ours[0]) - normal_of(theirs[0])).norm(), 1e-6);
+
+  // Exactly over a shared edge (the cell's diagonal), ODE makes one contact per facet; ours are
+  // merged (same point and normal).
+  dGeomSetPosition(sphere, 0.5, 0.5, 0.25);
+  EXPECT_EQ(collide(ode_mesh.geom, sphere, theirs), 2);
+  ASSERT_EQ(collide(mesh, sphere, ours), 1);
+  EXPECT_NEAR(ours[0].depth, deepest(theirs).depth, 1e-6);
+
+  // Overlapping several facets of the flat grid: every contact has the face normal (the flat
+  // seams are internal edges: no tilted edge normals) and the deepest one matches ODE's.
+  dGeomSetPosition(sphere, 0.1, 0.05, 0.2);
+  ASSERT_GE(collide(mesh, sphere, ours), 1);
+  ASSERT_GE(collide(ode_mesh.geom, sphere, theirs), 1);
+  EXPECT_NEAR(deepest(ours).depth, 0.1, 1e-12);
+  EXPECT_NEAR(deepest(ours).depth, deepest(theirs).depth, 1e-6);
+  for (const dContactGeom& g : ours) EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-12);
+
+  // Apart: nothing, and the array is untouched.
+  dGeomSetPosition(sphere, 0.3, 0.15, 0.31);
+  EXPECT_EQ(collide(mesh, sphere, ours), 0);
+  EXPECT_EQ(collide(sphere, mesh, ours), 0);
+}
+
+// The mesh turned and moved (on a body): contacts are computed in its frame and come back in world.
+TEST(OdeGeom, ContactsFollowTheMeshPose) {
+  dWorldID world = dWorldCreate();
+  Space space;
+  const auto grid = flat_grid(6, 3);
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, grid, "obb-min");
+  dBodyID body = dBodyCreate(world);
+  dGeomSetBody(mesh, body);
+  // Turn the grid so that its front faces +x, and move it.
+  dMatrix3 r;
+  dRFromAxisAndAngle(r, 0, 1, 0, M_PI / 2);  // z -> x
+  dBodySetRotation(body, r);
+  dBodySetPosition(body, 10, 20, 30);
+  dGeomID sphere = dCreateSphere(space.id, 1.0);
+  dGeomSetPosition(sphere, 10.75, 20.2, 29.9);
+  std::vector<dContactGeom> out;
+  ASSERT_GE(collide(mesh, sphere, out), 1);
+  // reduce_contacts puts the deepest first.
+  EXPECT_LT((normal_of(out[0]) - Vec3(-1, 0, 0)).norm(), 1e-12);
+  EXPECT_NEAR(out[0].depth, 0.25, 1e-12);
+  EXPECT_LT((pos_of(out[0]) - Vec3(10, 20.2, 29.9)).norm(), 1e-12);
+  for (const dContactGeom& g : out) EXPECT_LT((normal_of(g) - Vec3(-1, 0, 0)).norm(), 1e-12);
+  dGeomDestroy(mesh);
+  dBodyDestroy(body);
+  dWorldDestroy(world);
+}
+
+// Every primitive pressed into a flat grid from above: all normals -z (mesh = g1), the deepest
+// depth as ODE's trimesh computes it, side1 a real facet, side2 = -1.
+TEST(OdeGeom, PrimitivesAgainstFlatGridMatchOdeTrimesh) {
+  Space space;
+  const auto grid = flat_grid(10, 5);
+  OdeTrimesh ode_mesh(space.id, *grid);
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, grid, "aabb");
+  const Real depth = 0.05;
+  dMatrix3 lying;
+  dRFromAxisAndAngle(lying, 1, 0, 0, M_PI / 2);
+  struct Case {
+    const char* name;
+    dGeomID geom;
+    Real center_z;
+    int min_contacts;  // resting flat: at least this many (a box face: 4)
+  };
+  std::vector<Case> cases;
+  cases.push_back({"sphere", dCreateSphere(space.id, 0.5), 0.5 - depth, 1});
+  cases.push_back({"box", dCreateBox(space.id, 1.0, 0.8, 0.6), 0.3 - depth, 4});
+  dGeomID capsule = dCreateCapsule(space.id, 0.3, 1.2);
+  dGeomSetRotation(capsule, lying);
+  cases.push_back({"capsule", capsule, 0.3 - depth, 2});
+  cases.push_back({"cylinder", dCreateCylinder(space.id, 0.4, 0.6), 0.3 - depth, 1});
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    dGeomSetPosition(c.geom, 0.13, -0.21, c.center_z);
+    std::vector<dContactGeom> ours, theirs;
+    const int n = collide(mesh, c.geom, ours, 16);
+    ASSERT_GE(n, c.min_contacts);
+    ASSERT_GE(collide(ode_mesh.geom, c.geom, theirs, 16), 1);
+    EXPECT_NEAR(deepest(ours).depth, depth, 1e-6);
+    EXPECT_NEAR(deepest(ours).depth, deepest(theirs).depth, 1e-4);
+    for (const dContactGeom& g : ours) {
+      EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-6);
+      EXPECT_NEAR(g.pos[2], 0, 1e-6);  // on the mesh's surface
+      EXPECT_GE(g.depth, 0);
+      EXPECT_EQ(g.g1, mesh);
+      EXPECT_EQ(g.g2, c.geom);
+      EXPECT_GE(g.side1, 0);
+      EXPECT_LT(g.side1, int(grid->facet_count()));
+      EXPECT_EQ(g.side2, -1);
+    }
+    // Lifted clear of the grid: nothing.
+    dGeomSetPosition(c.geom, 0.13, -0.21, c.center_z + 2 * depth);
+    EXPECT_EQ(collide(mesh, c.geom, ours), 0);
+    EXPECT_EQ(collide(c.geom, mesh, ours), 0);
+  }
+}
+
+// The contact array protocol: never more than asked, the stride honoured (only the dContactGeom
+// part of each dContact written), CONTACTS_UNIMPORTANT gives some contacts and stops.
+TEST(OdeGeom, MaxCountSkipStrideAndUnimportant) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, scene_terrain(), "aabb");
+  // A big box sunk into the terrain: many candidate facets and contacts.
+  dGeomID box = dCreateBox(space.id, 3, 3, 3);
+  const Real ground = terrain_height(*boxtree::ode::geom_tree(mesh), 20, 20);
+  dGeomSetPosition(box, 20, 20, ground + 1.2);
+  for (int max : {1, 2, 3, 4, 7, 16, 64}) {
+    SCOPED_TRACE(max);
+    std::vector<dContact> contacts(std::size_t(max) + 2);
+    for (dContact& c : contacts) std::memset(static_cast<void*>(&c), 0xab, sizeof c);
+    const int n = dCollide(mesh, box, max, &contacts[0].geom, sizeof(dContact));
+    ASSERT_GE(n, 1);
+    ASSERT_LE(n, max);
+    for (int i = 0; i < int(contacts.size()); ++i) {
+      const auto* bytes = reinterpret_cast<const unsigned char*>(&contacts[std::size_t(i)]);
+      if (i < n) {
+        const dContactGeom& g = contacts[std::size_t(i)].geom;
+        EXPECT_EQ(g.g1, mesh);
+        EXPECT_EQ(g.g2, box);
+        EXPECT_GE(g.depth, 0);
+        EXPECT_NEAR(normal_of(g).norm(), 1, 1e-9);
+        // The surface and fdir1 parts are the caller's: untouched.
+        const auto* surface = reinterpret_cast<const unsigned char*>(&contacts[std::size_t(i)].surface);
+        for (std::size_t k = 0; k < sizeof(dSurfaceParameters); ++k) ASSERT_EQ(surface[k], 0xab);
+        const auto* fdir = reinterpret_cast<const unsigned char*>(&contacts[std::size_t(i)].fdir1);
+        for (std::size_t k = 0; k < sizeof(dVector3); ++k) ASSERT_EQ(fdir[k], 0xab);
+      } else {
+        for (std::size_t k = 0; k < sizeof(dContact); ++k) ASSERT_EQ(bytes[k], 0xab) << "entry " << i;
+      }
+    }
+    // The deepest contact is always kept.
+    std::vector<dContactGeom> all;
+    collide(mesh, box, all, 256);
+    Real best = 0;
+    for (int i = 0; i < n; ++i) best = std::max(best, contacts[std::size_t(i)].geom.depth);
+    EXPECT_NEAR(best, deepest(all).depth, 1e-12);
+  }
+  std::vector<dContactGeom> some;
+  const int n = collide(mesh, box, some, 3, int(CONTACTS_UNIMPORTANT));
+  EXPECT_GE(n, 1);
+  EXPECT_LE(n, 3);
+}
+
+// Rays: the same closest hits as ODE's trimesh (facet, and distance within float precision:
+// OPCODE stores the vertices as float).
+TEST(OdeGeom, RayClosestHitsMatchOdeTrimesh) {
+  Space space;
+  const auto terrain = scene_terrain();
+  OdeTrimesh ode_mesh(space.id, *terrain);
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, terrain, "obb-min");
+  dGeomID ray = dCreateRay(space.id, 100);
+  dGeomRaySetClosestHit(ray, 1);
+  Random random(11);
+  int hits = 0, facet_mismatches = 0, only_one_hits = 0;
+  const int rays = 2000;
+  for (int i = 0; i < rays; ++i) {
+    const Vec3 origin(random.uniform(-5, 45), random.uniform(-5, 45), random.uniform(-2, 15));
+    Vec3 dir = random.unit_vector();
+    if (i % 2 == 0) dir = (Vec3(random.uniform(0, 40), random.uniform(0, 40), 1) - origin).normalized();
+    dGeomRaySet(ray, origin.x(), origin.y(), origin.z(), dir.x(), dir.y(), dir.z());
+    std::vector<dContactGeom> ours, theirs;
+    const int n_ours = collide(mesh, ray, ours, 4);
+    const int n_theirs = collide(ode_mesh.geom, ray, theirs, 4);
+    ASSERT_LE(n_ours, 1);
+    if (n_theirs != n_ours) {
+      // A grazing ray through the mesh's outer boundary edge, or ending right at the surface,
+      // can hit in double and miss in float (or the reverse): counted, must be rare.
+      ++only_one_hits;
+      continue;
+    }
+    if (n_theirs == 0) continue;
+    ++hits;
+    EXPECT_NEAR(ours[0].depth, theirs[0].depth, 1e-4 * (1 + theirs[0].depth)) << "ray " << i;
+    EXPECT_LT((pos_of(ours[0]) - pos_of(theirs[0])).norm(), 1e-3) << "ray " << i;
+    EXPECT_EQ(ours[0].g1, mesh);
+    EXPECT_EQ(ours[0].g2, ray);
+    EXPECT_EQ(ours[0].side2, -1);
+    if (ours[0].side1 != theirs[0].side1) {
+      ++facet_mismatches;  // a hit on a shared edge: either facet is right
+    } else {
+      EXPECT_LT((normal_of(ours[0]) - normal_of(theirs[0])).norm(), 1e-5) << "ray " << i;
+    }
+  }
+  std::printf("[ rays     ] %d rays, %d hits, %d on a shared edge with a different facet, %d hit by one only\n",
+              rays, hits, facet_mismatches, only_one_hits);
+  EXPECT_GT(hits, rays / 3);
+  EXPECT_LE(facet_mismatches, hits / 100 + 1);
+  EXPECT_LE(only_one_hits, rays / 500 + 1);
+}
+
+// Ray options as dCollideRTL honours them: length, back-face culling, first contact, all hits.
+TEST(OdeGeom, RayLengthCullingAndAllHits) {
+  Space space;
+  const auto cube = box_mesh(Vec3(1, 1, 1));
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, cube, "aabb");
+  dGeomID ray = dCreateRay(space.id, 10);
+  dGeomRaySet(ray, 0.1, 0.2, 5, 0, 0, -1);  // down through the top face (z = 1) and the bottom (z = -1)
+  std::vector<dContactGeom> out;
+  ASSERT_EQ(collide(mesh, ray, out, 8), 2);  // all hits, nearest first
+  EXPECT_NEAR(out[0].depth, 4, 1e-12);
+  EXPECT_NEAR(out[1].depth, 6, 1e-12);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, -1)).norm(), 1e-12);  // -(top face normal +z)
+  EXPECT_LT((normal_of(out[1]) - Vec3(0, 0, 1)).norm(), 1e-12);   // -(bottom face normal -z), as ODE does
+  EXPECT_LT((pos_of(out[0]) - Vec3(0.1, 0.2, 1)).norm(), 1e-12);
+  ASSERT_EQ(collide(mesh, ray, out, 1), 1);
+  EXPECT_NEAR(out[0].depth, 4, 1e-12);
+  // Culling: the bottom face is seen from behind.
+  dGeomRaySetBackfaceCull(ray, 1);
+  ASSERT_EQ(collide(mesh, ray, out, 8), 1);
+  EXPECT_NEAR(out[0].depth, 4, 1e-12);
+  // From inside the cube, culling leaves nothing.
+  dGeomRaySet(ray, 0.1, 0.2, 0, 0, 0, -1);
+  EXPECT_EQ(collide(mesh, ray, out, 8), 0);
+  dGeomRaySetBackfaceCull(ray, 0);
+  ASSERT_EQ(collide(mesh, ray, out, 8), 1);
+  EXPECT_NEAR(out[0].depth, 1, 1e-12);
+  // Length: too short to reach.
+  dGeomRaySet(ray, 0.1, 0.2, 5, 0, 0, -1);
+  dGeomRaySetLength(ray, 3.9);
+  EXPECT_EQ(collide(mesh, ray, out, 8), 0);
+  dGeomRaySetLength(ray, 4.5);
+  EXPECT_EQ(collide(mesh, ray, out, 8), 1);
+  // First contact: one hit, whichever.
+  dGeomRaySetLength(ray, 10);
+  dGeomRaySetFirstContact(ray, 1);
+  EXPECT_EQ(collide(mesh, ray, out, 8), 1);
+  // Reverse order: ODE swaps, the normal becomes +face normal as for dCollide(ray, trimesh).
+  dGeomRaySetFirstContact(ray, 0);
+  dGeomRaySetClosestHit(ray, 1);
+  ASSERT_EQ(collide(ray, mesh, out, 8), 1);
+  EXPECT_EQ(out[0].g1, ray);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, 1)).norm(), 1e-12);
+}
+
+// Plane: every vertex below it, normal = plane normal (from the plane into the mesh), as
+// dCollideTrimeshPlane; with a small array, the deepest vertex is kept.
+TEST(OdeGeom, PlaneMatchesOdeTrimesh) {
+  Space space;
+  const auto cube = box_mesh(Vec3(1, 1, 1));
+  OdeTrimesh ode_mesh(space.id, *cube);
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, cube, "obb-min");
+  // Tilted plane cutting off three corners... and then parallel to a face.
+  const Vec3 n = Vec3(1, 2, 3).normalized();
+  dGeomID plane = dCreatePlane(space.id, n.x(), n.y(), n.z(), -0.3 * n.sum());
+  std::vector<dContactGeom> ours, theirs;
+  const int n_ours = collide(mesh, plane, ours, 16);
+  const int n_theirs = collide(ode_mesh.geom, plane, theirs, 16);
+  EXPECT_EQ(n_ours, n_theirs);
+  ASSERT_GE(n_ours, 1);
+  EXPECT_NEAR(deepest(ours).depth, deepest(theirs).depth, 1e-6);
+  for (const dContactGeom& g : ours) {
+    EXPECT_LT((normal_of(g) - n).norm(), 1e-12);
+    EXPECT_EQ(g.g1, mesh);
+    EXPECT_EQ(g.g2, plane);
+    EXPECT_EQ(g.side2, -1);
+  }
+  ASSERT_EQ(collide(mesh, plane, ours, 1), 1);
+  EXPECT_NEAR(ours[0].depth, deepest(theirs).depth, 1e-12);
+  dGeomDestroy(plane);
+  plane = dCreatePlane(space.id, 0, 0, 1, -0.5);  // z = -0.5: the four bottom corners, depth 0.5
+  ASSERT_EQ(collide(mesh, plane, ours, 16), 4);
+  for (const dContactGeom& g : ours) EXPECT_NEAR(g.depth, 0.5, 1e-12);
+  ASSERT_EQ(collide(plane, mesh, ours, 16), 4);  // reversed: normal -z, g1 = plane
+  EXPECT_LT((normal_of(ours[0]) - Vec3(0, 0, -1)).norm(), 1e-12);
+  EXPECT_EQ(ours[0].g1, plane);
+  dGeomDestroy(plane);
+  plane = dCreatePlane(space.id, 0, 0, 1, -1.01);
+  EXPECT_EQ(collide(mesh, plane, ours, 16), 0);
+}
+
+// Convex geoms need their points registered (ODE has no getter); unregistered ones give nothing.
+TEST(OdeGeom, ConvexWithRegisteredPoints) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
+  // A cube of half size 0.5 as a dConvex: planes (n, d), points, polygons.
+  static const dReal planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+  static const dReal points[] = {0.5,  0.5,  0.5, -0.5, 0.5,  0.5, -0.5, -0.5, 0.5,  0.5,  -0.5, 0.5,
+                                 0.5,  0.5,  -0.5, -0.5, 0.5,  -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+  static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
+                                      4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  dGeomID convex = boxtree::ode::create_convex(space.id, planes, 6, points, 8, polygons);
+  dGeomSetPosition(convex, 0.1, 0.2, 0.45);
+  std::vector<dContactGeom> out;
+  ASSERT_GE(collide(mesh, convex, out, 8), 1);
+  EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
+  for (const dContactGeom& g : out) EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-6);
+  ASSERT_GE(collide(convex, mesh, out, 8), 1);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, 1)).norm(), 1e-6);
+  dGeomSetPosition(convex, 0.1, 0.2, 0.55);
+  EXPECT_EQ(collide(mesh, convex, out, 8), 0);
+  // Forgotten (or never registered): no contacts, and no crash.
+  boxtree::ode::forget_convex(convex);
+  dGeomSetPosition(convex, 0.1, 0.2, 0.45);
+  EXPECT_EQ(collide(mesh, convex, out, 8), 0);
+}
+
+// Mesh vs mesh: boxtree vs boxtree (same and different methods) and boxtree vs ODE's trimesh, in
+// both argument orders. A cube sunk 0.05 into a flat grid: normals from the cube into the grid.
+TEST(OdeGeom, MeshVersusMeshBothOrders) {
+  Space space;
+  const auto grid = flat_grid(8, 4);
+  const auto cube = box_mesh(Vec3(0.5, 0.5, 0.5));
+  dGeomID ground = dCreateBoxtreeMesh(space.id, grid, "aabb");
+  dGeomID cube_same = dCreateBoxtreeMesh(space.id, cube, "aabb");
+  dGeomID cube_other = dCreateBoxtreeMesh(space.id, cube, "obb-min");
+  OdeTrimesh cube_ode(space.id, *cube);
+  dMatrix3 r;
+  dRFromAxisAndAngle(r, 0, 0, 1, 0.3);
+  for (dGeomID c : {cube_same, cube_other, cube_ode.geom}) {
+    dGeomSetPosition(c, 0.2, 0.1, 0.45);
+    dGeomSetRotation(c, r);
+  }
+  for (dGeomID c : {cube_same, cube_other, cube_ode.geom}) {
+    std::vector<dContactGeom> out;
+    // From the cube (g2) down into the ground (g1). Where a corner of the cube just crosses a
+    // grid facet, the least penetration of that one triangle pair can be sideways or even the
+    // wrong way (a sliver of a side wall pushed down out of one small facet): per-pair contacts
+    // know nothing of the rest of the meshes. Those must stay shallow and few.
+    auto check = [&](dGeomID g1, dGeomID g2, Real down) {
+      std::vector<dContactGeom> contacts;
+      ASSERT_GE(collide(g1, g2, contacts, 16), 3);
+      int vertical = 0;
+      for (const dContactGeom& g : contacts) {
+        EXPECT_EQ(g.g1, g1);
+        EXPECT_EQ(g.g2, g2);
+        const int ground_side = g1 == ground ? g.side1 : g.side2;
+        const int cube_side = g1 == ground ? g.side2 : g.side1;
+        EXPECT_GE(ground_side, 0);
+        EXPECT_LT(ground_side, int(grid->facet_count()));
+        EXPECT_GE(cube_side, 0);
+        EXPECT_LT(cube_side, 12);
+        if (normal_of(g).z() * down > 0.99) ++vertical;
+        if (normal_of(g).z() * down < -0.1) {
+          EXPECT_LT(g.depth, 0.02);
+        }
+      }
+      EXPECT_GE(vertical, int(contacts.size()) * 3 / 4);
+      EXPECT_NEAR(deepest(contacts).depth, 0.05, 1e-9);
+      EXPECT_GT(normal_of(deepest(contacts)).z() * down, 0.99);
+    };
+    check(ground, c, -1);
+    check(c, ground, 1);
+    dGeomSetPosition(c, 0.2, 0.1, 0.55);
+    EXPECT_EQ(collide(ground, c, out, 16), 0);
+  }
+}
+
+// ODE's registration does not survive dCloseODE: close, re-init, register again, collide.
+TEST(OdeGeom, ReRegistersAfterCloseAndInit) {
+  dBoxtreeClose();
+  dCloseODE();
+  dInitODE2(0);
+  EXPECT_EQ(dBoxtreeGetClass(), -1);
+  ASSERT_GE(dBoxtreeInit(), int(dFirstUserClass));
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(4, 2), "aabb");
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.25);
+  std::vector<dContactGeom> out;
+  EXPECT_EQ(collide(mesh, sphere, out), 1);
+  EXPECT_EQ(collide(sphere, mesh, out), 1);
+}
+
+}  // namespace
+}  // namespace boxtree::ode_test
