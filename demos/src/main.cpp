@@ -1,0 +1,285 @@
+// boxtree-demo: drops a few hundred mixed bodies onto a meshed terrain in Bullet or ODE, with
+// the engine's own triangle-mesh midphase or boxtree's, and renders PNG frames off-screen
+// (OSMesa). With --overlay-level it instead draws the hierarchy's volumes over the mesh.
+// Errors: one line on stderr starting with "boxtree-demo: error:", exit code 1 (2 for usage).
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "boxtree/error.h"
+#include "boxtree/method.h"
+#include "overlay.h"
+#include "render.h"
+#include "scene.h"
+#include "sim.h"
+
+namespace {
+
+using namespace demo;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+struct Options {
+  std::string engine = "bullet";
+  std::string midphase;  // empty: boxtree if the engine's adapter was built, else builtin
+  std::string method = "aabb";
+  int bodies = 300;
+  int terrain_size = 128;
+  std::string mesh;
+  std::string up = "z";
+  int steps = 300;
+  int every = 10;
+  int width = 640, height = 480;
+  std::string out;
+  std::uint64_t seed = 1;
+  std::string json_path;
+  int overlay_level = -1;
+};
+
+constexpr Real kTimeStep = 1.0 / 60;
+
+// Frames of an earlier run in the same folder would mix with ours: remove just those.
+void remove_old_frames(const fs::path& dir) {
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("frame-", 0) == 0 && entry.path().extension() == ".png") fs::remove(entry.path());
+  }
+}
+
+void write_json(const std::string& path, const json& summary) {
+  if (path.empty()) return;
+  std::ofstream out(path);
+  out << summary.dump(2) << "\n";
+  if (!out) throw boxtree::Error("cannot write " + path);
+}
+
+int run_overlay(const Options& o, const TerrainOptions& terrain_options) {
+  const fs::path dir = o.out.empty() ? fs::path("out/demo-overlay") : fs::path(o.out);
+  fs::create_directories(dir);
+  std::string name;
+  const auto mesh = make_demo_terrain(terrain_options, o.seed, &name);
+  Renderer renderer(o.width, o.height);
+  const std::string file =
+      (dir / ("overlay-" + o.method + "-level" + std::to_string(o.overlay_level) + ".png")).string();
+  const auto start = Clock::now();
+  const OverlayResult result = render_overlay(renderer, mesh, o.method, o.overlay_level, file);
+  std::cout << "boxtree-demo: overlay of " << name << " (" << mesh->facet_count() << " facets), method " << o.method
+            << ", tree height " << result.height << ": " << result.volumes << " volumes at level " << o.overlay_level
+            << " in " << file << " (" << seconds_since(start) << " s)\n";
+  write_json(o.json_path, {{"mode", "overlay"},
+                           {"mesh", name},
+                           {"facets", mesh->facet_count()},
+                           {"method", o.method},
+                           {"level", o.overlay_level},
+                           {"tree_height", result.height},
+                           {"volumes", result.volumes},
+                           {"image", file}});
+  return 0;
+}
+
+int run_simulation(const Options& o, const TerrainOptions& terrain_options) {
+  const bool bullet = o.engine == "bullet";
+  const bool adapter = bullet ? have_bullet_adapter() : have_ode_adapter();
+  const std::string midphase = o.midphase.empty() ? (adapter ? "boxtree" : "builtin") : o.midphase;
+  if (midphase == "boxtree") boxtree::parse_method(o.method);  // a bad name fails before any work
+  const fs::path dir = o.out.empty() ? fs::path("out") / ("demo-" + o.engine + "-" + midphase) : fs::path(o.out);
+  fs::create_directories(dir);
+  remove_old_frames(dir);
+
+  const auto start = Clock::now();
+  const Scene scene = make_scene(terrain_options, o.bodies, o.seed);
+  SimOptions sim_options;
+  sim_options.boxtree_midphase = midphase == "boxtree";
+  sim_options.method = o.method;
+  sim_options.seed = o.seed;
+  auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
+  const double setup_seconds = seconds_since(start);
+
+  Renderer renderer(o.width, o.height);
+  const DrawMesh terrain_draw = make_terrain_draw_mesh(*scene.terrain);
+  std::vector<DrawMesh> body_draws;
+  body_draws.reserve(scene.bodies.size());
+  for (const BodySpec& b : scene.bodies) body_draws.push_back(make_draw_mesh(render_mesh_of(b), b.colour));
+  // A fixed camera on where the action is: the bodies' starting column and the ground under it.
+  Vec3 lo = scene.bounds_min, hi = scene.bounds_max;
+  if (!scene.bodies.empty()) {
+    lo.head<2>() = hi.head<2>() = scene.bodies.front().position.head<2>();
+    for (const BodySpec& b : scene.bodies) {
+      lo.head<2>() = lo.head<2>().cwiseMin(b.position.head<2>());
+      hi.head<2>() = hi.head<2>().cwiseMax(b.position.head<2>());
+      hi.z() = std::max(hi.z(), b.position.z());
+    }
+    lo.head<2>().array() -= 3;
+    hi.head<2>().array() += 3;
+  }
+  const Camera camera = frame_box(lo, hi, Real(o.width) / o.height);
+
+  std::vector<std::string> images;
+  double render_seconds = 0;
+  auto render = [&](int step) {
+    const auto t0 = Clock::now();
+    renderer.begin_frame(camera);
+    renderer.draw(terrain_draw);
+    const std::vector<Pose> poses = sim->poses();
+    for (std::size_t i = 0; i < poses.size(); ++i) renderer.draw(body_draws[i], poses[i]);
+    char name[32];
+    std::snprintf(name, sizeof name, "frame-%05d.png", step);
+    images.push_back((dir / name).string());
+    renderer.write_png(images.back());
+    render_seconds += seconds_since(t0);
+  };
+
+  const bool progress = isatty(STDERR_FILENO) != 0;
+  long long contacts_total = 0;
+  int contacts_max = 0;
+  const auto sim_start = Clock::now();
+  auto last_progress = sim_start;
+  render(0);
+  for (int step = 1; step <= o.steps; ++step) {
+    sim->step(kTimeStep);
+    contacts_total += sim->contacts();
+    contacts_max = std::max(contacts_max, sim->contacts());
+    if (step % o.every == 0 || step == o.steps) render(step);
+    if (progress && (seconds_since(last_progress) > 0.2 || step == o.steps)) {
+      last_progress = Clock::now();
+      std::fprintf(stderr, "\rboxtree-demo: step %d/%d, %.1f s, %d contacts, %zu frames   ", step, o.steps,
+                   seconds_since(sim_start), sim->contacts(), images.size());
+      std::fflush(stderr);
+    }
+  }
+  if (progress) std::fprintf(stderr, "\r%*s\r", 70, "");
+  const double wall = seconds_since(start);
+
+  // Where the bodies ended: is the centre above the terrain's surface under it (or is there no
+  // terrain under it)? A small allowance covers resting penetration and the tori, whose centre
+  // is in their hole, where a bump of the ground may come up.
+  constexpr Real kAllowance = 0.05;
+  const TerrainProbe& probe = *scene.probe;
+  const std::vector<Pose> final_poses = sim->poses();
+  json final_bodies = json::array();
+  int above = 0, below = 0, off = 0;
+  for (std::size_t i = 0; i < final_poses.size(); ++i) {
+    const Vec3& p = final_poses[i].position;
+    Real ground = 0;
+    const bool on = std::isfinite(p.squaredNorm()) && probe.height_at(p.x(), p.y(), &ground);
+    json body = {{"shape", shape_name(scene.bodies[i].shape)}, {"position", {p.x(), p.y(), p.z()}}};
+    if (on) {
+      body["terrain_z"] = ground;
+      body["above_terrain"] = p.z() > ground - kAllowance;
+      ++(p.z() > ground - kAllowance ? above : below);
+    } else {
+      body["terrain_z"] = nullptr;
+      body["above_terrain"] = nullptr;
+      ++off;
+    }
+    final_bodies.push_back(body);
+  }
+
+  const double contacts_mean = o.steps > 0 ? double(contacts_total) / o.steps : 0;
+  std::printf("boxtree-demo: %s, %s midphase (%s), %zu bodies on %s (%zu facets)\n", o.engine.c_str(), midphase.c_str(),
+              sim->midphase_description().c_str(), scene.bodies.size(), scene.terrain_name.c_str(),
+              scene.terrain->facet_count());
+  std::printf(
+      "  %d steps (%.2f s simulated) in %.1f s wall: setup %.1f s, collision detection %.1f s, rendering %.1f s\n",
+      o.steps, o.steps * kTimeStep, wall, setup_seconds, sim->collision_seconds(), render_seconds);
+  std::printf(
+      "  contacts per step: %.0f on average, %d at most; bodies at the end: %d above the terrain, %d below, %d off "
+      "it\n",
+      contacts_mean, contacts_max, above, below, off);
+  std::printf("  %zu images: %s/frame-*.png\n", images.size(), dir.string().c_str());
+
+  json summary = {{"mode", "simulation"},
+                  {"engine", o.engine},
+                  {"midphase", midphase},
+                  {"midphase_shapes", sim->midphase_description()},
+                  {"method", o.method},
+                  {"seed", o.seed},
+                  {"bodies", scene.bodies.size()},
+                  {"terrain", scene.terrain_name},
+                  {"terrain_facets", scene.terrain->facet_count()},
+                  {"steps", o.steps},
+                  {"dt", kTimeStep},
+                  {"width", o.width},
+                  {"height", o.height},
+                  {"wall_seconds", wall},
+                  {"setup_seconds", setup_seconds},
+                  {"collision_seconds", sim->collision_seconds()},
+                  {"render_seconds", render_seconds},
+                  {"contacts_per_step", contacts_mean},
+                  {"contacts_max", contacts_max},
+                  {"bodies_above_terrain", above},
+                  {"bodies_below_terrain", below},
+                  {"bodies_off_terrain", off},
+                  {"out_dir", dir.string()},
+                  {"images", images},
+                  {"final_bodies", final_bodies}};
+  write_json(o.json_path, summary);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"boxtree-demo: bodies dropped onto a meshed terrain (Bullet or ODE), rendered off-screen to PNG"};
+  app.add_option("--engine", o.engine, "Physics engine")
+      ->check(CLI::IsMember({"bullet", "ode"}))
+      ->capture_default_str();
+  app.add_option("--midphase", o.midphase,
+                 "Triangle-mesh midphase: boxtree (the adapter) or builtin (btBvhTriangleMeshShape + "
+                 "btGImpactMeshShape, or ODE's OPCODE trimesh) [default: boxtree if the adapter is built]")
+      ->check(CLI::IsMember({"boxtree", "builtin"}));
+  app.add_option("--method", o.method,
+                 "Hierarchy method of the boxtree midphase and of the overlay (see `boxtree --help`)")
+      ->capture_default_str();
+  app.add_option("--bodies", o.bodies, "Number of bodies dropped")->check(CLI::Range(0, 100000))->capture_default_str();
+  app.add_option("--terrain-size", o.terrain_size, "Terrain grid cells per side (2 x size^2 facets)")
+      ->check(CLI::Range(2, 4096))
+      ->capture_default_str();
+  app.add_option("--mesh", o.mesh, "Use this mesh file (.obj/.stl/.ply/.off) as the terrain, scaled to 40 m across");
+  app.add_option("--up", o.up, "The --mesh file's up axis")->check(CLI::IsMember({"z", "y"}))->capture_default_str();
+  app.add_option("--steps", o.steps, "Simulation steps of 1/60 s")
+      ->check(CLI::Range(0, 10000000))
+      ->capture_default_str();
+  app.add_option("--every", o.every, "Write a frame every K steps (and the first and last)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--width", o.width, "Image width")->check(CLI::Range(16, 16384))->capture_default_str();
+  app.add_option("--height", o.height, "Image height")->check(CLI::Range(16, 16384))->capture_default_str();
+  app.add_option("--out", o.out, "Output folder [default: out/demo-ENGINE-MIDPHASE, or out/demo-overlay]");
+  app.add_option("--seed", o.seed, "Seed of the terrain and the scene")->capture_default_str();
+  app.add_option("--json", o.json_path, "Also write the summary as JSON to this file");
+  app.add_option("--overlay-level", o.overlay_level,
+                 "Overlay mode: no simulation; draw the tree's volumes at this level (0 = leaves) over the terrain "
+                 "or --mesh, into OUT/overlay-METHOD-levelL.png")
+      ->check(CLI::NonNegativeNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // prints the help or the usage error
+    return code == 0 ? 0 : 2;
+  }
+
+  try {
+    TerrainOptions terrain;
+    terrain.cells = o.terrain_size;
+    terrain.mesh_path = o.mesh;
+    terrain.up_axis = o.up[0];
+    return o.overlay_level >= 0 ? run_overlay(o, terrain) : run_simulation(o, terrain);
+  } catch (const std::exception& e) {
+    std::cerr << "boxtree-demo: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,343 @@
+#include "scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "boxtree/build.h"
+#include "boxtree/error.h"
+#include "boxtree/generate.h"
+#include "boxtree/io.h"
+#include "boxtree/query.h"
+
+namespace demo {
+
+namespace {
+
+using boxtree::FacetId;
+using boxtree::VertexId;
+
+constexpr Real kPi = 3.14159265358979323846;
+// The generated terrain's width and noise height, and the width a mesh file is scaled to: the
+// bodies' sizes (0.25 to 0.6 m) are chosen for it.
+constexpr Real kTerrainWidth = 40;
+constexpr Real kNoiseHeight = 4;
+constexpr Real kBodyDensity = 500;  // kg/m^3
+
+Real signed_volume(const TriangleMesh& mesh) {
+  Real v = 0;
+  for (std::size_t f = 0; f < mesh.facet_count(); ++f)
+    v += mesh.corner(FacetId(f), 0).dot(mesh.corner(FacetId(f), 1).cross(mesh.corner(FacetId(f), 2)));
+  return v / 6;
+}
+
+// Convex shapes around the origin: each face's normal must point away from the origin.
+void orient_away_from_origin(TriangleMesh& mesh) {
+  for (auto& t : mesh.triangles) {
+    const Vec3 &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
+    if ((b - a).cross(c - a).dot(a + b + c) < 0) std::swap(t[1], t[2]);
+  }
+}
+
+// A closed surface of revolution about z from a profile (radius, z) running from the north pole
+// (radius 0) to the south pole (radius 0).
+TriangleMesh lathe(const std::vector<std::pair<Real, Real>>& profile, int segments) {
+  TriangleMesh mesh;
+  const int rings = int(profile.size()) - 2;
+  mesh.vertices.emplace_back(0, 0, profile.front().second);
+  for (int r = 1; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const Real phi = 2 * kPi * s / segments;
+      mesh.vertices.emplace_back(profile[r].first * std::cos(phi), profile[r].first * std::sin(phi), profile[r].second);
+    }
+  mesh.vertices.emplace_back(0, 0, profile.back().second);
+  const VertexId south = VertexId(mesh.vertices.size() - 1);
+  auto ring = [&](int r, int s) { return VertexId(1 + (r - 1) * segments + s % segments); };
+  for (int s = 0; s < segments; ++s) mesh.triangles.push_back({0, ring(1, s), ring(1, s + 1)});
+  for (int r = 1; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      mesh.triangles.push_back({ring(r, s), ring(r + 1, s), ring(r + 1, s + 1)});
+      mesh.triangles.push_back({ring(r, s), ring(r + 1, s + 1), ring(r, s + 1)});
+    }
+  for (int s = 0; s < segments; ++s) mesh.triangles.push_back({ring(rings, s), south, ring(rings, s + 1)});
+  orient_away_from_origin(mesh);
+  return mesh;
+}
+
+// Moves the mesh so that its bounding box is centred on the origin; returns the half extents.
+Vec3 centre_bounds(TriangleMesh& mesh) {
+  Vec3 lo = mesh.vertices.front(), hi = lo;
+  for (const Vec3& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  const Vec3 mid = (lo + hi) / 2;
+  for (Vec3& v : mesh.vertices) v -= mid;
+  return (hi - lo) / 2;
+}
+
+}  // namespace
+
+const char* shape_name(Shape shape) {
+  switch (shape) {
+    case Shape::sphere:
+      return "sphere";
+    case Shape::box:
+      return "box";
+    case Shape::capsule:
+      return "capsule";
+    case Shape::cylinder:
+      return "cylinder";
+    case Shape::convex:
+      return "convex";
+    case Shape::mesh:
+      return "mesh";
+  }
+  return "?";
+}
+
+TriangleMesh make_box_mesh(const Vec3& h) {
+  TriangleMesh mesh;
+  for (int mask = 0; mask < 8; ++mask)
+    mesh.vertices.emplace_back(mask & 1 ? h.x() : -h.x(), mask & 2 ? h.y() : -h.y(), mask & 4 ? h.z() : -h.z());
+  // Two triangles per face; corner index bits are (x, y, z).
+  const int faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  for (const auto& f : faces) {
+    mesh.triangles.push_back({VertexId(f[0]), VertexId(f[1]), VertexId(f[2])});
+    mesh.triangles.push_back({VertexId(f[0]), VertexId(f[2]), VertexId(f[3])});
+  }
+  orient_away_from_origin(mesh);
+  return mesh;
+}
+
+TriangleMesh make_capsule_mesh(Real radius, Real half_length, int segments, int rings) {
+  std::vector<std::pair<Real, Real>> profile;
+  for (int r = 0; r <= rings; ++r) {  // northern hemisphere, ending on the equator
+    const Real theta = kPi / 2 * r / rings;
+    profile.emplace_back(radius * std::sin(theta), half_length + radius * std::cos(theta));
+  }
+  for (int r = 0; r <= rings; ++r) {  // southern hemisphere, starting on the equator
+    const Real theta = kPi / 2 + kPi / 2 * r / rings;
+    profile.emplace_back(radius * std::sin(theta), -half_length + radius * std::cos(theta));
+  }
+  profile.back().first = 0;
+  return lathe(profile, segments);
+}
+
+TriangleMesh make_cylinder_mesh(Real radius, Real half_length, int segments) {
+  return lathe({{0, half_length}, {radius, half_length}, {radius, -half_length}, {0, -half_length}}, segments);
+}
+
+TriangleMesh make_torus_mesh(Real major, Real minor, int segments, int sides) {
+  TriangleMesh mesh;
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      const Real u = 2 * kPi * i / segments, v = 2 * kPi * j / sides;
+      const Real r = major + minor * std::cos(v);
+      mesh.vertices.emplace_back(r * std::cos(u), r * std::sin(u), minor * std::sin(v));
+    }
+  auto id = [&](int i, int j) { return VertexId((i % segments) * sides + j % sides); };
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  if (signed_volume(mesh) < 0)
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  return mesh;
+}
+
+TriangleMesh make_icosahedron(Real radius) {
+  const Real phi = (1 + std::sqrt(Real(5))) / 2;
+  TriangleMesh mesh;
+  for (Real a : {-1.0, 1.0})
+    for (Real b : {-phi, phi}) {
+      mesh.vertices.emplace_back(0, a, b);
+      mesh.vertices.emplace_back(a, b, 0);
+      mesh.vertices.emplace_back(b, 0, a);
+    }
+  // The faces are the triples of mutually adjacent vertices (edge length 2).
+  const int n = int(mesh.vertices.size());
+  auto adjacent = [&](int i, int j) { return std::abs((mesh.vertices[i] - mesh.vertices[j]).norm() - 2) < 1e-9; };
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      for (int k = j + 1; k < n; ++k)
+        if (adjacent(i, j) && adjacent(j, k) && adjacent(i, k))
+          mesh.triangles.push_back({VertexId(i), VertexId(j), VertexId(k)});
+  const Real scale = radius / std::sqrt(1 + phi * phi);
+  for (Vec3& v : mesh.vertices) v *= scale;
+  orient_away_from_origin(mesh);
+  return mesh;
+}
+
+std::shared_ptr<const TriangleMesh> make_demo_terrain(const TerrainOptions& options, std::uint64_t seed,
+                                                      std::string* name) {
+  TriangleMesh mesh;
+  if (!options.mesh_path.empty()) {
+    mesh = boxtree::load_mesh(options.mesh_path);
+    if (options.up_axis == 'y')  // a quarter turn about x: y-up becomes z-up (keeps the winding)
+      for (Vec3& v : mesh.vertices) v = Vec3(v.x(), -v.z(), v.y());
+    Vec3 lo = mesh.vertices.front(), hi = lo;
+    for (const Vec3& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+    const Real width = std::max(hi.x() - lo.x(), hi.y() - lo.y());
+    if (!(width > 0)) throw boxtree::Error(options.mesh_path + ": the mesh has no extent across x and y");
+    const Real scale = kTerrainWidth / width;
+    const Vec3 shift((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, lo.z());
+    for (Vec3& v : mesh.vertices) v = (v - shift) * scale;
+    if (name) *name = options.mesh_path;
+  } else {
+    if (options.cells < 2 || options.cells > 4096) throw boxtree::Error("--terrain-size must be in [2, 4096]");
+    mesh = boxtree::make_terrain(options.cells, options.cells, seed, kTerrainWidth, kNoiseHeight);
+    // The bowl: flat in the middle, a rim rising towards the square's edges (a rounded square,
+    // so that the corners rise as well).
+    const Real half = kTerrainWidth / 2;
+    for (Vec3& v : mesh.vertices) {
+      v.x() -= half;
+      v.y() -= half;
+      const Real u = v.x() / half, w = v.y() / half;
+      const Real r = std::min(Real(1), std::pow(u * u * u * u + w * w * w * w, Real(0.25)));
+      const Real rim = std::max(Real(0), r - Real(0.55)) / Real(0.45);
+      v.z() += 7 * rim * rim;
+    }
+    if (name) *name = "fractal terrain " + std::to_string(options.cells) + "x" + std::to_string(options.cells);
+  }
+  return std::make_shared<const TriangleMesh>(std::move(mesh));
+}
+
+struct TerrainProbe::Impl {
+  boxtree::Tree<boxtree::Aabb> tree;
+  Real top = 0;
+};
+
+TerrainProbe::TerrainProbe(std::shared_ptr<const TriangleMesh> terrain) : impl_(std::make_unique<Impl>()) {
+  impl_->tree = boxtree::build_tree<boxtree::Aabb>(std::move(terrain));
+  impl_->top = impl_->tree.volume(impl_->tree.root()).max.z() + 1;
+}
+TerrainProbe::~TerrainProbe() = default;
+
+bool TerrainProbe::height_at(Real x, Real y, Real* z) const {
+  const auto hit = boxtree::ray_closest_hit(impl_->tree, boxtree::Ray{{x, y, impl_->top}, {0, 0, -1}});
+  if (!hit) return false;
+  *z = impl_->top - hit->t;
+  return true;
+}
+
+Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
+  Scene scene;
+  scene.terrain = make_demo_terrain(options, seed, &scene.terrain_name);
+  scene.bounds_min = scene.bounds_max = scene.terrain->vertices.front();
+  for (const Vec3& v : scene.terrain->vertices)
+    scene.bounds_min = scene.bounds_min.cwiseMin(v), scene.bounds_max = scene.bounds_max.cwiseMax(v);
+
+  // A separate stream from the terrain's, so that the bodies do not change with the terrain size.
+  boxtree::Random random(seed * 0x9E3779B97F4A7C15ULL + 12345);
+  scene.probe = std::make_shared<const TerrainProbe>(scene.terrain);
+  const TerrainProbe& probe = *scene.probe;
+  // Drop columns on a grid over the middle of the terrain, layer above layer.
+  const Real spacing = 1.5, layer_height = 1.8;
+  // A square of columns as wide as the count needs, at most the middle of the terrain.
+  const Real max_half = std::min(Real(11), 0.3 * (scene.bounds_max - scene.bounds_min).head<2>().minCoeff());
+  const int per_side =
+      std::clamp(int(std::ceil(std::sqrt(Real(std::max(count, 1))))), 1, int(2 * max_half / spacing) + 1);
+  const Real drop_half = spacing * (per_side - 1) / 2;
+  const int per_layer = per_side * per_side;
+  // Terrain height over each column (the highest point near it), computed once.
+  std::vector<Real> column_top(per_layer, scene.bounds_min.z());
+  const Vec3 mid = (scene.bounds_min + scene.bounds_max) / 2;
+  for (int c = 0; c < per_layer; ++c) {
+    const Real cx = mid.x() - drop_half + spacing * (c % per_side), cy = mid.y() - drop_half + spacing * (c / per_side);
+    for (Real dx : {-0.8, 0.0, 0.8})
+      for (Real dy : {-0.8, 0.0, 0.8}) {
+        Real z;
+        if (probe.height_at(cx + dx, cy + dy, &z)) column_top[c] = std::max(column_top[c], z);
+      }
+  }
+  scene.bodies.reserve(std::size_t(std::max(count, 0)));
+  for (int i = 0; i < count; ++i) {
+    BodySpec b;
+    const Real pick = random.uniform();
+    b.shape = pick < 0.2    ? Shape::sphere
+              : pick < 0.4  ? Shape::box
+              : pick < 0.55 ? Shape::capsule
+              : pick < 0.7  ? Shape::cylinder
+              : pick < 0.88 ? Shape::convex
+                            : Shape::mesh;
+    const Real size = random.uniform(0.25, 0.55);
+    TriangleMesh mesh;
+    Real volume = 0;
+    switch (b.shape) {
+      case Shape::sphere:
+        b.radius = size;
+        volume = 4.0 / 3.0 * kPi * size * size * size;
+        b.colour = {0.85, 0.25, 0.2};
+        break;
+      case Shape::box:
+        b.half_extents = Vec3(random.uniform(0.5, 1), random.uniform(0.5, 1), random.uniform(0.5, 1)) * size;
+        volume = 8 * b.half_extents.prod();
+        b.colour = {0.95, 0.7, 0.2};
+        break;
+      case Shape::capsule:
+        b.radius = 0.5 * size;
+        b.half_length = random.uniform(0.4, 1) * size;
+        volume = kPi * b.radius * b.radius * (2 * b.half_length + 4.0 / 3.0 * b.radius);
+        b.colour = {0.3, 0.55, 0.95};
+        break;
+      case Shape::cylinder:
+        b.radius = random.uniform(0.5, 0.9) * size;
+        b.half_length = random.uniform(0.3, 0.8) * size;
+        volume = 2 * kPi * b.radius * b.radius * b.half_length;
+        b.colour = {0.6, 0.35, 0.85};
+        break;
+      case Shape::convex: {
+        // A stretched icosahedron: any linear map keeps a convex polyhedron convex.
+        mesh = make_icosahedron(1);
+        const Vec3 stretch(random.uniform(0.6, 1.2), random.uniform(0.6, 1.2), random.uniform(0.6, 1.2));
+        for (Vec3& v : mesh.vertices) v = v.cwiseProduct(stretch) * size;
+        b.colour = {0.2, 0.75, 0.7};
+        break;
+      }
+      case Shape::mesh:
+        // Small closed non-convex meshes, for mesh-vs-mesh contacts.
+        if (random.uniform() < 0.5) {
+          mesh = boxtree::make_bumpy_sphere(14, 9, 0.2, random.next());
+          for (Vec3& v : mesh.vertices) v *= size;
+        } else {
+          mesh = make_torus_mesh(0.7 * size, 0.3 * size, 18, 8);
+        }
+        b.colour = {0.9, 0.45, 0.7};
+        break;
+    }
+    if (b.shape == Shape::convex || b.shape == Shape::mesh) {
+      b.half_extents = centre_bounds(mesh);
+      volume = signed_volume(mesh);
+      b.mesh = std::make_shared<const TriangleMesh>(std::move(mesh));
+    }
+    // A little variation in shade so that neighbours of one kind are told apart.
+    b.colour = (b.colour * random.uniform(0.8, 1.1)).cwiseMin(1.0);
+    b.mass = kBodyDensity * volume;
+    const int layer = i / per_layer, column = i % per_layer;
+    const Real x = mid.x() - drop_half + spacing * (column % per_side) + random.uniform(-0.25, 0.25);
+    const Real y = mid.y() - drop_half + spacing * (column / per_side) + random.uniform(-0.25, 0.25);
+    b.position = Vec3(x, y, column_top[column] + 1.2 + layer_height * layer);
+    const Vec3 axis = random.unit_vector();
+    b.orientation = Quat(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), axis));
+    scene.bodies.push_back(std::move(b));
+  }
+  return scene;
+}
+
+TriangleMesh render_mesh_of(const BodySpec& body) {
+  switch (body.shape) {
+    case Shape::sphere:
+      return boxtree::make_uv_sphere(20, 12, body.radius);
+    case Shape::box:
+      return make_box_mesh(body.half_extents);
+    case Shape::capsule:
+      return make_capsule_mesh(body.radius, body.half_length, 18, 5);
+    case Shape::cylinder:
+      return make_cylinder_mesh(body.radius, body.half_length, 20);
+    case Shape::convex:
+    case Shape::mesh:
+      return *body.mesh;
+  }
+  return {};
+}
+
+}  // namespace demo

@@ -1,0 +1,42 @@
+#pragma once
+// One physics world built from a Scene: Bullet or ODE, with the engine's own triangle-mesh
+// midphase or the boxtree adapter's. Both step with a fixed time step, single-threaded, so the
+// same scene gives the same motion on every run.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene.h"
+
+namespace demo {
+
+struct SimOptions {
+  bool boxtree_midphase = false;
+  std::string method = "aabb";  // the boxtree hierarchy method (boxtree/method.h)
+  std::uint64_t seed = 1;       // for engines that randomise their solver (ODE's quickstep)
+};
+
+class Simulation {
+ public:
+  virtual ~Simulation() = default;
+  virtual void step(Real dt) = 0;
+  // One pose per scene body, in scene order.
+  virtual std::vector<Pose> poses() const = 0;
+  // Contact points in the last step (Bullet: points in the persistent manifolds; ODE: contact
+  // joints made).
+  virtual int contacts() const = 0;
+  // Seconds spent in collision detection so far (Bullet: performDiscreteCollisionDetection, i.e.
+  // AABB update, broadphase, midphase and narrowphase; ODE: dSpaceCollide with the near callback).
+  virtual double collision_seconds() const = 0;
+  // What handles the triangle meshes, for the summary.
+  virtual std::string midphase_description() const = 0;
+};
+
+// Throw boxtree::Error when the boxtree midphase is asked for but the adapter was not built.
+std::unique_ptr<Simulation> make_bullet_simulation(const Scene& scene, const SimOptions& options);
+std::unique_ptr<Simulation> make_ode_simulation(const Scene& scene, const SimOptions& options);
+
+bool have_bullet_adapter();
+bool have_ode_adapter();
+
+}  // namespace demo

@@ -1,0 +1,209 @@
+// The scene in Bullet: the terrain as a static triangle-mesh shape, the bodies as Bullet's
+// convex primitives and, for the small meshes, dynamic triangle-mesh shapes.
+//   builtin: btBvhTriangleMeshShape (terrain) and btGImpactMeshShape (dynamic meshes; Bullet's
+//            only moving concave shape), with GImpact's algorithm registered.
+//   boxtree: boxtree::bullet::BoxtreeMeshShape for both, with the adapter's algorithms.
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "boxtree/error.h"
+#include "sim.h"
+
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+#include "boxtree/bullet/algorithms.h"
+#include "boxtree/bullet/mesh_shape.h"
+#endif
+
+namespace demo {
+
+bool have_bullet_adapter() { return BOXTREE_DEMO_HAVE_BULLET_ADAPTER + 0 != 0; }
+
+namespace {
+
+btVector3 bt(const Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+
+// Times collision detection inside each step: the world's one virtual entry for it.
+class TimedWorld : public btDiscreteDynamicsWorld {
+ public:
+  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+  void performDiscreteCollisionDetection() override {
+    const auto start = std::chrono::steady_clock::now();
+    btDiscreteDynamicsWorld::performDiscreteCollisionDetection();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  double seconds = 0;
+};
+
+// A triangle mesh as Bullet's striding interface; owns the arrays it points into.
+struct BulletMeshData {
+  explicit BulletMeshData(const TriangleMesh& mesh) {
+    vertices.reserve(3 * mesh.vertices.size());
+    for (const Vec3& v : mesh.vertices)
+      for (int k = 0; k < 3; ++k) vertices.push_back(btScalar(v[k]));
+    indices.reserve(3 * mesh.facet_count());
+    for (const auto& t : mesh.triangles)
+      for (auto v : t) indices.push_back(int(v));
+    array = std::make_unique<btTriangleIndexVertexArray>(int(mesh.facet_count()), indices.data(), 3 * int(sizeof(int)),
+                                                         int(mesh.vertices.size()), vertices.data(),
+                                                         3 * int(sizeof(btScalar)));
+  }
+  std::vector<btScalar> vertices;
+  std::vector<int> indices;
+  std::unique_ptr<btTriangleIndexVertexArray> array;
+};
+
+class BulletSimulation final : public Simulation {
+ public:
+  BulletSimulation(const Scene& scene, const SimOptions& options) : boxtree_(options.boxtree_midphase) {
+#if !BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+    if (boxtree_) throw boxtree::Error("the Bullet adapter (boxtree::bullet) was not built; use --midphase builtin");
+#endif
+    btDefaultCollisionConstructionInfo info;
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+    // The adapter's algorithms may be larger than Bullet's default pool element.
+    if (boxtree_)
+      info.m_customCollisionAlgorithmMaxElementSize =
+          std::max(info.m_customCollisionAlgorithmMaxElementSize, boxtree::bullet::boxtreeAlgorithmMaxSize());
+#endif
+    configuration_ = std::make_unique<btDefaultCollisionConfiguration>(info);
+    dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
+    // Before any body exists: Bullet caches an algorithm per overlapping pair.
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+    if (boxtree_) boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get());
+#endif
+    if (!boxtree_) btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher_.get());
+    broadphase_ = std::make_unique<btDbvtBroadphase>();
+    solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
+    world_ = std::make_unique<TimedWorld>(dispatcher_.get(), broadphase_.get(), solver_.get(), configuration_.get());
+    world_->setGravity(btVector3(0, 0, btScalar(-9.81)));
+
+    // The terrain.
+    btCollisionShape* terrain_shape = nullptr;
+    if (boxtree_) {
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+      terrain_shape = own(new boxtree::bullet::BoxtreeMeshShape(scene.terrain, options.method));
+#endif
+    } else {
+      mesh_data_.push_back(std::make_unique<BulletMeshData>(*scene.terrain));
+      terrain_shape = own(new btBvhTriangleMeshShape(mesh_data_.back()->array.get(), true));
+    }
+    btRigidBody::btRigidBodyConstructionInfo terrain_info(0, nullptr, terrain_shape);
+    terrain_info.m_friction = 0.8;
+    terrain_ = std::make_unique<btRigidBody>(terrain_info);
+    world_->addRigidBody(terrain_.get());
+
+    for (const BodySpec& spec : scene.bodies) {
+      btCollisionShape* shape = nullptr;
+      switch (spec.shape) {
+        case Shape::sphere:
+          shape = own(new btSphereShape(btScalar(spec.radius)));
+          break;
+        case Shape::box:
+          shape = own(new btBoxShape(bt(spec.half_extents)));
+          break;
+        case Shape::capsule:
+          shape = own(new btCapsuleShapeZ(btScalar(spec.radius), btScalar(2 * spec.half_length)));
+          break;
+        case Shape::cylinder:
+          shape = own(new btCylinderShapeZ(
+              btVector3(btScalar(spec.radius), btScalar(spec.radius), btScalar(spec.half_length))));
+          break;
+        case Shape::convex: {
+          auto* hull = new btConvexHullShape();
+          for (const Vec3& v : spec.mesh->vertices) hull->addPoint(bt(v), false);
+          hull->recalcLocalAabb();
+          shape = own(hull);
+          break;
+        }
+        case Shape::mesh:
+          if (boxtree_) {
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+            shape = own(new boxtree::bullet::BoxtreeMeshShape(spec.mesh, options.method));
+#endif
+          } else {
+            mesh_data_.push_back(std::make_unique<BulletMeshData>(*spec.mesh));
+            auto* gimpact = new btGImpactMeshShape(mesh_data_.back()->array.get());
+            gimpact->updateBound();
+            shape = own(gimpact);
+          }
+          break;
+      }
+      btVector3 inertia(0, 0, 0);
+      shape->calculateLocalInertia(btScalar(spec.mass), inertia);
+      btTransform start;
+      start.setOrigin(bt(spec.position));
+      start.setRotation(btQuaternion(btScalar(spec.orientation.x()), btScalar(spec.orientation.y()),
+                                     btScalar(spec.orientation.z()), btScalar(spec.orientation.w())));
+      btRigidBody::btRigidBodyConstructionInfo body_info(btScalar(spec.mass), nullptr, shape, inertia);
+      body_info.m_startWorldTransform = start;
+      body_info.m_friction = 0.6;
+      body_info.m_restitution = 0.1;
+      // Round things would roll across the whole bowl without it.
+      body_info.m_rollingFriction = 0.02;
+      body_info.m_spinningFriction = 0.02;
+      bodies_.push_back(std::make_unique<btRigidBody>(body_info));
+      world_->addRigidBody(bodies_.back().get());
+    }
+  }
+
+  ~BulletSimulation() override {
+    for (auto& body : bodies_) world_->removeRigidBody(body.get());
+    world_->removeRigidBody(terrain_.get());
+  }
+
+  void step(Real dt) override {
+    world_->stepSimulation(btScalar(dt), 1, btScalar(dt));
+    contacts_ = 0;
+    for (int i = 0; i < dispatcher_->getNumManifolds(); ++i)
+      contacts_ += dispatcher_->getManifoldByIndexInternal(i)->getNumContacts();
+  }
+
+  std::vector<Pose> poses() const override {
+    std::vector<Pose> out;
+    out.reserve(bodies_.size());
+    for (const auto& body : bodies_) {
+      const btTransform& t = body->getWorldTransform();
+      const btQuaternion q = t.getRotation();
+      out.push_back({Vec3(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z()), Quat(q.w(), q.x(), q.y(), q.z())});
+    }
+    return out;
+  }
+
+  int contacts() const override { return contacts_; }
+  double collision_seconds() const override { return world_->seconds; }
+  std::string midphase_description() const override {
+    return boxtree_ ? "boxtree::bullet::BoxtreeMeshShape (terrain and meshes)"
+                    : "btBvhTriangleMeshShape (terrain), btGImpactMeshShape (meshes)";
+  }
+
+ private:
+  btCollisionShape* own(btCollisionShape* shape) {
+    shapes_.emplace_back(shape);
+    return shape;
+  }
+
+  bool boxtree_;
+  // Declared in construction order; destroyed in reverse (bodies before shapes before the world).
+  std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
+  std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  std::unique_ptr<btBroadphaseInterface> broadphase_;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver_;
+  std::unique_ptr<TimedWorld> world_;
+  std::vector<std::unique_ptr<BulletMeshData>> mesh_data_;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes_;
+  std::unique_ptr<btRigidBody> terrain_;
+  std::vector<std::unique_ptr<btRigidBody>> bodies_;
+  int contacts_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulation> make_bullet_simulation(const Scene& scene, const SimOptions& options) {
+  return std::make_unique<BulletSimulation>(scene, options);
+}
+
+}  // namespace demo

@@ -1,0 +1,239 @@
+// The scene in ODE: the terrain as a static triangle mesh, the bodies as ODE's primitives,
+// convexes and, for the small meshes, triangle meshes attached to bodies.
+//   builtin: dCreateTriMesh (OPCODE) for the terrain and the meshes.
+//   boxtree: dCreateBoxtreeMesh (boxtree::ode) for both; convexes are registered with the
+//            adapter, which needs their points.
+#include <ode/ode.h>
+
+#include <chrono>
+
+#include "boxtree/error.h"
+#include "sim.h"
+
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+#include "boxtree/ode/boxtree_geom.h"
+#endif
+
+namespace demo {
+
+bool have_ode_adapter() { return BOXTREE_DEMO_HAVE_ODE_ADAPTER + 0 != 0; }
+
+namespace {
+
+constexpr int kMaxContactsPerPair = 8;
+
+// Arrays ODE keeps pointers into (trimesh data, convex planes and polygons).
+struct OdeMeshData {
+  std::vector<dReal> vertices;
+  std::vector<dTriIndex> indices;
+  dTriMeshDataID data = nullptr;
+  ~OdeMeshData() {
+    if (data) dGeomTriMeshDataDestroy(data);
+  }
+};
+
+struct OdeConvexData {
+  std::vector<dReal> planes, points;
+  std::vector<unsigned> polygons;
+};
+
+class OdeSimulation final : public Simulation {
+ public:
+  OdeSimulation(const Scene& scene, const SimOptions& options) : boxtree_(options.boxtree_midphase) {
+#if !BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_) throw boxtree::Error("the ODE adapter (boxtree::ode) was not built; use --midphase builtin");
+#endif
+    dInitODE2(0);
+    dAllocateODEDataForThread(dAllocateMaskAll);
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_) dBoxtreeInit();  // after dInitODE2, which clears the collider table
+#endif
+    // Quickstep shuffles its constraint rows with ODE's global random generator.
+    dRandSetSeed(static_cast<unsigned long>(options.seed));
+    world_ = dWorldCreate();
+    dWorldSetGravity(world_, 0, 0, -9.81);
+    dWorldSetQuickStepNumIterations(world_, 30);
+    dWorldSetCFM(world_, 1e-5);
+    dWorldSetERP(world_, 0.2);
+    dWorldSetContactMaxCorrectingVel(world_, 3);
+    dWorldSetContactSurfaceLayer(world_, 0.002);
+    dWorldSetAngularDamping(world_, 0.02);  // round things would roll across the whole bowl
+    dWorldSetAutoDisableFlag(world_, 1);
+    space_ = dHashSpaceCreate(nullptr);
+    dHashSpaceSetLevels(space_, -2, 4);
+    contacts_group_ = dJointGroupCreate(0);
+
+    terrain_ = create_mesh_geom(scene.terrain, options.method);
+    for (const BodySpec& spec : scene.bodies) {
+      dBodyID body = dBodyCreate(world_);
+      dMass mass;
+      dGeomID geom = nullptr;
+      const dReal m = spec.mass;
+      switch (spec.shape) {
+        case Shape::sphere:
+          geom = dCreateSphere(space_, spec.radius);
+          dMassSetSphereTotal(&mass, m, spec.radius);
+          break;
+        case Shape::box:
+          geom = dCreateBox(space_, 2 * spec.half_extents.x(), 2 * spec.half_extents.y(), 2 * spec.half_extents.z());
+          dMassSetBoxTotal(&mass, m, 2 * spec.half_extents.x(), 2 * spec.half_extents.y(), 2 * spec.half_extents.z());
+          break;
+        case Shape::capsule:
+          geom = dCreateCapsule(space_, spec.radius, 2 * spec.half_length);
+          dMassSetCapsuleTotal(&mass, m, 3, spec.radius, 2 * spec.half_length);
+          break;
+        case Shape::cylinder:
+          geom = dCreateCylinder(space_, spec.radius, 2 * spec.half_length);
+          dMassSetCylinderTotal(&mass, m, 3, spec.radius, 2 * spec.half_length);
+          break;
+        case Shape::convex:
+          geom = create_convex(*spec.mesh);
+          // The mass model of the hull's bounding box: close enough for a demo.
+          dMassSetBoxTotal(&mass, m, 2 * spec.half_extents.x(), 2 * spec.half_extents.y(), 2 * spec.half_extents.z());
+          break;
+        case Shape::mesh:
+          geom = create_mesh_geom(spec.mesh, options.method);
+          dMassSetBoxTotal(&mass, m, 2 * spec.half_extents.x(), 2 * spec.half_extents.y(), 2 * spec.half_extents.z());
+          break;
+      }
+      dBodySetMass(body, &mass);
+      dGeomSetBody(geom, body);
+      dBodySetPosition(body, spec.position.x(), spec.position.y(), spec.position.z());
+      const dQuaternion q = {spec.orientation.w(), spec.orientation.x(), spec.orientation.y(), spec.orientation.z()};
+      dBodySetQuaternion(body, q);
+      bodies_.push_back(body);
+    }
+  }
+
+  ~OdeSimulation() override {
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    for (dGeomID convex : convex_geoms_) boxtree::ode::forget_convex(convex);
+    for (auto& data : mesh_data_)
+      if (data->data) boxtree::ode::forget_trimesh_data(data->data);
+#endif
+    dJointGroupDestroy(contacts_group_);
+    dSpaceDestroy(space_);  // destroys its geoms (cleanup mode is on by default)
+    dWorldDestroy(world_);
+    mesh_data_.clear();
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_) dBoxtreeClose();
+#endif
+    dCloseODE();
+  }
+
+  void step(Real dt) override {
+    contacts_ = 0;
+    const auto start = std::chrono::steady_clock::now();
+    dSpaceCollide(space_, this, &OdeSimulation::near_callback);
+    collision_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    dWorldQuickStep(world_, dt);
+    dJointGroupEmpty(contacts_group_);
+  }
+
+  std::vector<Pose> poses() const override {
+    std::vector<Pose> out;
+    out.reserve(bodies_.size());
+    for (dBodyID body : bodies_) {
+      const dReal* p = dBodyGetPosition(body);
+      const dReal* q = dBodyGetQuaternion(body);
+      out.push_back({Vec3(p[0], p[1], p[2]), Quat(q[0], q[1], q[2], q[3]).normalized()});
+    }
+    return out;
+  }
+
+  int contacts() const override { return contacts_; }
+  double collision_seconds() const override { return collision_seconds_; }
+  std::string midphase_description() const override {
+    return boxtree_ ? "dCreateBoxtreeMesh (terrain and meshes)" : "dCreateTriMesh, OPCODE (terrain and meshes)";
+  }
+
+ private:
+  dGeomID create_mesh_geom(const std::shared_ptr<const TriangleMesh>& mesh, const std::string& method) {
+    if (boxtree_) {
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+      return dCreateBoxtreeMesh(space_, mesh, method.c_str());
+#endif
+    }
+    (void)method;
+    auto data = std::make_unique<OdeMeshData>();
+    for (const Vec3& v : mesh->vertices)
+      for (int k = 0; k < 3; ++k) data->vertices.push_back(v[k]);
+    for (const auto& t : mesh->triangles)
+      for (auto v : t) data->indices.push_back(dTriIndex(v));
+    data->data = dGeomTriMeshDataCreate();
+    dGeomTriMeshDataBuildDouble(data->data, data->vertices.data(), 3 * sizeof(dReal), int(mesh->vertices.size()),
+                                data->indices.data(), int(data->indices.size()), 3 * sizeof(dTriIndex));
+    // ODE's convex-vs-trimesh collider needs the face angles (it aborts without them).
+    dGeomTriMeshDataPreprocess2(data->data, 1U << dTRIDATAPREPROCESS_BUILD_FACE_ANGLES, nullptr);
+    dGeomID geom = dCreateTriMesh(space_, data->data, nullptr, nullptr, nullptr);
+    mesh_data_.push_back(std::move(data));
+    return geom;
+  }
+
+  dGeomID create_convex(const TriangleMesh& hull) {
+    auto data = std::make_unique<OdeConvexData>();
+    for (const Vec3& v : hull.vertices)
+      for (int k = 0; k < 3; ++k) data->points.push_back(v[k]);
+    for (std::size_t f = 0; f < hull.facet_count(); ++f) {
+      const auto& t = hull.triangles[f];
+      const Vec3 n = (hull.corner(boxtree::FacetId(f), 1) - hull.corner(boxtree::FacetId(f), 0))
+                         .cross(hull.corner(boxtree::FacetId(f), 2) - hull.corner(boxtree::FacetId(f), 0))
+                         .normalized();
+      data->planes.insert(data->planes.end(), {n.x(), n.y(), n.z(), n.dot(hull.corner(boxtree::FacetId(f), 0))});
+      data->polygons.insert(data->polygons.end(), {3u, t[0], t[1], t[2]});
+    }
+    const unsigned planes = unsigned(hull.facet_count()), points = unsigned(hull.vertices.size());
+    dGeomID geom = nullptr;
+    if (boxtree_) {
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+      // The adapter keeps its own copy of the points (ODE has no getter for them).
+      geom = boxtree::ode::create_convex(space_, data->planes.data(), planes, data->points.data(), points,
+                                         data->polygons.data());
+      convex_geoms_.push_back(geom);
+#endif
+    } else {
+      geom = dCreateConvex(space_, data->planes.data(), planes, data->points.data(), points, data->polygons.data());
+    }
+    convex_data_.push_back(std::move(data));
+    return geom;
+  }
+
+  static void near_callback(void* self, dGeomID a, dGeomID b) { static_cast<OdeSimulation*>(self)->collide_pair(a, b); }
+
+  void collide_pair(dGeomID a, dGeomID b) {
+    dBodyID body_a = dGeomGetBody(a), body_b = dGeomGetBody(b);
+    if (!body_a && !body_b) return;
+    dContact contact[kMaxContactsPerPair];
+    const int n = dCollide(a, b, kMaxContactsPerPair, &contact[0].geom, sizeof(dContact));
+    for (int i = 0; i < n; ++i) {
+      contact[i].surface.mode = dContactApprox1 | dContactRolling;
+      contact[i].surface.mu = 0.6;
+      contact[i].surface.rho = 0.002;  // rolling friction
+      contact[i].surface.rho2 = 0;
+      contact[i].surface.rhoN = 0;
+      dJointID joint = dJointCreateContact(world_, contacts_group_, &contact[i]);
+      dJointAttach(joint, body_a, body_b);
+    }
+    contacts_ += n;
+  }
+
+  bool boxtree_;
+  dWorldID world_ = nullptr;
+  dSpaceID space_ = nullptr;
+  dJointGroupID contacts_group_ = nullptr;
+  dGeomID terrain_ = nullptr;
+  std::vector<dBodyID> bodies_;
+  std::vector<std::unique_ptr<OdeMeshData>> mesh_data_;
+  std::vector<std::unique_ptr<OdeConvexData>> convex_data_;
+  std::vector<dGeomID> convex_geoms_;
+  int contacts_ = 0;
+  double collision_seconds_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulation> make_ode_simulation(const Scene& scene, const SimOptions& options) {
+  return std::make_unique<OdeSimulation>(scene, options);
+}
+
+}  // namespace demo
