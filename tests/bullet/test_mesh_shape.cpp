@@ -235,7 +235,8 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
         ++ties;  // through a shared edge or vertex: equal fractions, either facet is right
         continue;
       }
-      EXPECT_EQ(a.m_hitNormalWorld, b.m_hitNormalWorld) << "ray " << i;
+      // (btVector3::operator== also compares the unused fourth lane: compare x, y, z.)
+      EXPECT_EQ(to_vec3(a.m_hitNormalWorld), to_vec3(b.m_hitNormalWorld)) << "ray " << i;
       EXPECT_LT((to_vec3(a.m_hitPointWorld) - to_vec3(b.m_hitPointWorld)).norm(), 1e-9)
           << "ray " << i << ": " << to_vec3(a.m_hitPointWorld).transpose() << " vs " << to_vec3(b.m_hitPointWorld).transpose()
           << " fractions " << a.m_closestHitFraction << " " << b.m_closestHitFraction;
