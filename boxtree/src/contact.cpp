@@ -811,7 +811,9 @@ void polish_normal(const F& f, const Vec3& front, Vec3& normal, Real& value) {
   Real step = 1e-2;
   int evaluations = 0;
   Vec3 momentum = Vec3::Zero();
-  while (step > 1e-12 && evaluations < 600) {
+  // Stops at 1e-7 rad and 150 evaluations per start: far below what contacts need, and 3x cheaper
+  // than polishing to 1e-12 (cylinders on ODE's drop scene: 190 -> 65 us per dCollide).
+  while (step > 1e-7 && evaluations < 150) {
     Vec3 t1;
     Vec3 t2;
     detail::orthonormal_completion(normal, t1, t2);
@@ -846,7 +848,7 @@ ccd_t make_ccd(Real size) {
   ccd.center2 = ccd_shape_center;
   // Bounded effort: curved shapes (cylinders, the rounded triangle) make EPA converge linearly.
   ccd.max_iterations = 200;
-  ccd.epa_tolerance = 1e-8 * size;
+  ccd.epa_tolerance = 1e-6 * size;
   ccd.mpr_tolerance = 1e-8 * size;
   ccd.dist_tolerance = 1e-10 * size;
   return ccd;
