@@ -25,6 +25,7 @@
 
 #include "boxtree/contact.h"
 #include "boxtree/geometry.h"
+#include "support/random.h"
 
 namespace boxtree {
 namespace {
@@ -46,29 +47,8 @@ std::string str(const Vec3& v) {
   return text;
 }
 
-struct Random {
-  std::mt19937_64 engine;
-  explicit Random(std::uint64_t seed) : engine(seed) {}
-  Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine); }
-  bool chance(Real p) { return uniform(0, 1) < p; }
-  Vec3 point(Real lo, Real hi) {
-    const Real x = uniform(lo, hi);
-    const Real y = uniform(lo, hi);
-    const Real z = uniform(lo, hi);
-    return {x, y, z};
-  }
-  Vec3 unit_vector() {
-    for (;;) {
-      const Vec3 v = point(-1, 1);
-      const Real n = v.norm();
-      if (n > 0.1 && n <= 1) return v / n;
-    }
-  }
-  Mat3 rotation() {
-    Eigen::Quaterniond q(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-    if (q.norm() < 0.1) q = Eigen::Quaterniond(1, 0.2, 0.3, 0.4);
-    return q.normalized().toRotationMatrix();
-  }
+struct Random : test::Random {
+  using test::Random::Random;
   // A random triangle, sometimes degenerate.
   std::array<Vec3, 3> triangle() {
     std::array<Vec3, 3> t = {point(-1, 1), point(-1, 1), point(-1, 1)};

@@ -30,6 +30,7 @@
 
 #include "boxtree/geometry.h"
 #include "support/exact.h"
+#include "support/random.h"
 
 namespace boxtree {
 namespace {
@@ -55,39 +56,6 @@ std::string str(const Vec3& v) {
 // ------------------------------------------------------------------------------------------
 // Random data
 
-struct Random {
-  std::mt19937_64 engine;
-  explicit Random(std::uint64_t seed) : engine(seed) {}
-  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine); }
-  Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine); }
-  bool chance(Real p) { return uniform(0, 1) < p; }
-  // Multiples of 1/denominator in [lo, hi].
-  Real grid(int lo, int hi, int denominator = 1) { return Real(integer(lo * denominator, hi * denominator)) / denominator; }
-  Vec3 grid_point(int lo, int hi, int denominator = 1) {
-    const Real x = grid(lo, hi, denominator);
-    const Real y = grid(lo, hi, denominator);
-    const Real z = grid(lo, hi, denominator);
-    return {x, y, z};
-  }
-  Vec3 point(Real lo, Real hi) {
-    const Real x = uniform(lo, hi);
-    const Real y = uniform(lo, hi);
-    const Real z = uniform(lo, hi);
-    return {x, y, z};
-  }
-  Vec3 unit_vector() {
-    for (;;) {
-      const Vec3 v = point(-1, 1);
-      const Real n = v.norm();
-      if (n > 0.1 && n <= 1) return v / n;
-    }
-  }
-  Mat3 rotation() {
-    Eigen::Quaterniond q(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-    if (q.norm() < 0.1) q = Eigen::Quaterniond(1, 0.2, 0.3, 0.4);
-    return q.normalized().toRotationMatrix();
-  }
-};
 
 // A triangle with small grid coordinates, degenerate (coincident or collinear corners) with
 // probability `degenerate`.

@@ -112,46 +112,6 @@ Vec3 perpendicular_to(const Vec3& d) {
   return b1;
 }
 
-// Closest points of the segments [p0,p1] and [q0,q1] (Ericson, Real-Time Collision Detection,
-// 5.1.9), with the unclamped parameter from the cross product as in geometry.cpp (stable for
-// nearly parallel segments) and exact zero tests for zero-length segments.
-void closest_points_of_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
-                                Vec3& on_q) {
-  const Vec3 d1 = p1 - p0;
-  const Vec3 d2 = q1 - q0;
-  const Vec3 r = p0 - q0;
-  const Real a = d1.squaredNorm();
-  const Real e = d2.squaredNorm();
-  const Real f = d2.dot(r);
-  Real s = 0;
-  Real t = 0;
-  if (a == 0 && e == 0) {
-    // both points
-  } else if (a == 0) {
-    t = std::clamp(f / e, Real(0), Real(1));
-  } else {
-    const Real c = d1.dot(r);
-    if (e == 0) {
-      s = std::clamp(-c / a, Real(0), Real(1));
-    } else {
-      const Real b = d1.dot(d2);
-      const Vec3 n = d1.cross(d2);
-      const Real denom = n.squaredNorm();
-      s = denom > 0 ? std::clamp((-r).cross(d2).dot(n) / denom, Real(0), Real(1)) : Real(0);
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, Real(0), Real(1));
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, Real(0), Real(1));
-      }
-    }
-  }
-  on_p = p0 + s * d1;
-  on_q = q0 + t * d2;
-}
-
 // Closest pair of the segment [p0,p1] and the triangle. The pair has a segment end on one side or
 // a triangle edge on the other unless the segment crosses the triangle, so the candidates are the
 // two ends, the three edges and the crossing point of the plane.
@@ -183,7 +143,7 @@ SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, con
   for (int i = 0; i < 3; ++i) {
     Vec3 x;
     Vec3 y;
-    closest_points_of_segments(p0, p1, tri.v[i], tri.v[(i + 1) % 3], x, y);
+    closest_points_on_segments(p0, p1, tri.v[i], tri.v[(i + 1) % 3], x, y);
     consider(x, y);
   }
   return best;
@@ -629,7 +589,7 @@ PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const Tria
     for (int j = 0; j < 3; ++j) {
       Vec3 x;
       Vec3 y;
-      closest_points_of_segments(shape.vertices[shape.edge_from[e]], shape.vertices[shape.edge_to[e]], tri.v[j],
+      closest_points_on_segments(shape.vertices[shape.edge_from[e]], shape.vertices[shape.edge_to[e]], tri.v[j],
                                  tri.v[(j + 1) % 3], x, y);
       consider(x, y);
     }
@@ -970,7 +930,7 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
       position = closest_point_on_triangle(deepest - tri.signed_distance(deepest) * tri.normal, a, b, c);
     } else {
       Vec3 on_segment;
-      closest_points_of_segments(p0, p1, tri.v[best_edge], tri.v[(best_edge + 1) % 3], on_segment, position);
+      closest_points_on_segments(p0, p1, tri.v[best_edge], tri.v[(best_edge + 1) % 3], on_segment, position);
     }
     primary = make_contact(position, best_normal, r + best_overlap);
     push_out = one_sided && best_normal.dot(tri.normal) < -kBehind;
@@ -1050,7 +1010,7 @@ int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
     const auto [sb, eb] = extent_of(tb);
     Vec3 on_a;
     Vec3 on_b;
-    closest_points_of_segments(sa, ea, sb, eb, on_a, on_b);
+    closest_points_on_segments(sa, ea, sb, eb, on_a, on_b);
     const Real distance = (on_a - on_b).norm();
     if (!(distance <= std::max(options.margin, Real(0)))) return 0;
     Vec3 n;
@@ -1212,7 +1172,7 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
     position = tri.v[on_top[0]];
   } else if (count == 2) {
     Vec3 unused;
-    closest_points_of_segments(landing, landing, tri.v[on_top[0]], tri.v[on_top[1]], unused, position);
+    closest_points_on_segments(landing, landing, tri.v[on_top[0]], tri.v[on_top[1]], unused, position);
   } else {
     position = closest_point_on_triangle(landing, a, b, c);
   }

@@ -550,7 +550,8 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   return p + (n.dot(pa) / normal_squared) * n;
 }
 
-Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
+                                Vec3& on_q) {
   // Ericson 5.1.9 (ClosestPtSegmentSegment), with exact zero tests for zero-length segments and
   // the unclamped s taken from the cross product d1 x d2 instead of a*e - b*b: both are
   // |d1 x d2|^2, but the latter cancels catastrophically for nearly parallel segments.
@@ -562,8 +563,9 @@ Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3
   const Real f = d2.dot(r);
   Real s = 0;
   Real t = 0;
-  if (a == 0 && e == 0) return r.squaredNorm();
-  if (a == 0) {
+  if (a == 0 && e == 0) {
+    // both are points
+  } else if (a == 0) {
     t = std::clamp(f / e, Real(0), Real(1));
   } else {
     const Real c = d1.dot(r);
@@ -585,7 +587,14 @@ Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3
       }
     }
   }
-  return ((p0 + s * d1) - (q0 + t * d2)).squaredNorm();
+  on_p = p0 + s * d1;
+  on_q = q0 + t * d2;
+}
+
+Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  Vec3 on_p, on_q;
+  closest_points_on_segments(p0, p1, q0, q1, on_p, on_q);
+  return (on_p - on_q).squaredNorm();
 }
 
 Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c) {

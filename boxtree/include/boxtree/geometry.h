@@ -42,6 +42,10 @@ Obb swept_box(const Vec3& from, const Vec3& to, const Vec3& half);
 // Closest point of the (possibly degenerate) triangle to p (Ericson, Real-Time Collision
 // Detection, 5.1.5).
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+// Closest points of the segments [p0,p1] and [q0,q1] (Ericson 5.1.9), stable for nearly parallel
+// and zero-length segments.
+void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
+                                Vec3& on_q);
 // Squared distance between segments [p0,p1] and [q0,q1] (Ericson 5.1.9), robust for zero-length segments.
 Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1);
 // Squared distance between a segment and a triangle (0 if they intersect).
