@@ -30,13 +30,7 @@
 namespace boxtree {
 namespace {
 
-int scaled(int n) {
-  static const double scale = [] {
-    const char* text = std::getenv("BOXTREE_TEST_SCALE");
-    return text ? std::max(0.01, std::atof(text)) : 1.0;
-  }();
-  return std::max(1, static_cast<int>(n * scale));
-}
+using test::scaled;
 
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
 constexpr Real kPi = 3.14159265358979323846;

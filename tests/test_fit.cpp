@@ -36,17 +36,12 @@
 #include <vector>
 
 #include "boxtree/detail/fit.h"
+#include "support/random.h"
 
 namespace boxtree::detail {
 namespace {
 
-int scaled(int n) {
-  static const double scale = [] {
-    const char* text = std::getenv("BOXTREE_TEST_SCALE");
-    return text ? std::max(0.01, std::atof(text)) : 1.0;
-  }();
-  return std::max(1, static_cast<int>(n * scale));
-}
+using test::scaled;
 
 constexpr Real kPi = 3.14159265358979323846;
 constexpr Real kInf = std::numeric_limits<Real>::infinity();

@@ -61,14 +61,6 @@ namespace {
 
 using namespace test;
 
-int scaled(int n) {
-  static const double scale = [] {
-    const char* text = std::getenv("BOXTREE_TEST_SCALE");
-    return text ? std::max(0.01, std::atof(text)) : 1.0;
-  }();
-  return std::max(1, static_cast<int>(n * scale));
-}
-
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 
 std::string str(const Vec3& v) {

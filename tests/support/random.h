@@ -1,6 +1,8 @@
 #pragma once
 // Random inputs for the randomized cross-checks (a fixed seed per test: failures reproduce).
+#include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -8,6 +10,15 @@
 #include "boxtree/shapes.h"
 
 namespace boxtree::test {
+
+// A test's case count times BOXTREE_TEST_SCALE (default 1; at least 1 case), for longer local runs.
+inline int scaled(int n) {
+  static const double scale = [] {
+    const char* text = std::getenv("BOXTREE_TEST_SCALE");
+    return text ? std::max(0.01, std::atof(text)) : 1.0;
+  }();
+  return std::max(1, static_cast<int>(n * scale));
+}
 
 struct Random {
   std::mt19937_64 engine;
