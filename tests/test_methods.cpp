@@ -16,33 +16,55 @@ namespace {
 
 using namespace test;
 
-template <class V>
+// A volume kind and its parent rule (BuildSettings::parent_fit): every kind with the paper's
+// rule, and every oriented kind and hybrid also with parents fitted to their facets ("-tight").
+template <class V, ParentFit kFit = ParentFit::enclose_children>
+struct Config {
+  using Volume = V;
+  static constexpr ParentFit fit = kFit;
+  static BuildSettings settings() {
+    BuildSettings s = test_settings<V>();
+    s.parent_fit = kFit;
+    return s;
+  }
+  static Tree<V> build(const TriangleMesh& mesh) { return build_tree<V>(mesh, settings()); }
+};
+
+template <class C>
 class Methods : public ::testing::Test {};
 
-#define BOXTREE_TYPE_LIST_ENTRY(V) , V
-using AllVolumeKinds = ::testing::Types<Aabb BOXTREE_FOR_EACH_NON_AABB_VOLUME(BOXTREE_TYPE_LIST_ENTRY)>;
-#undef BOXTREE_TYPE_LIST_ENTRY
+#define BOXTREE_CONFIG_ENTRY(V) , Config<V>
+#define BOXTREE_TIGHT_CONFIG_ENTRY(V) , Config<V, ParentFit::fit_facets>
+using AllConfigs = ::testing::Types<Config<Aabb> BOXTREE_FOR_EACH_NON_AABB_VOLUME(BOXTREE_CONFIG_ENTRY)
+                                        BOXTREE_FOR_EACH_NON_AABB_VOLUME(BOXTREE_TIGHT_CONFIG_ENTRY)>;
+#undef BOXTREE_CONFIG_ENTRY
+#undef BOXTREE_TIGHT_CONFIG_ENTRY
 
-class VolumeNames {
+class ConfigNames {
 public:
-  template <class V>
+  template <class C>
   static std::string GetName(int) {
+    using V = typename C::Volume;
+    const std::string tight = C::fit == ParentFit::fit_facets ? "-tight" : "";
     if constexpr (is_hybrid_v<V>) {
-      return std::string(V::Lower::kind_name) + "+aabb@3";
+      return std::string(V::Lower::kind_name) + tight + "+aabb@3";
     } else {
-      return V::kind_name;
+      return V::kind_name + tight;
     }
   }
 };
-TYPED_TEST_SUITE(Methods, AllVolumeKinds, VolumeNames);
+TYPED_TEST_SUITE(Methods, AllConfigs, ConfigNames);
 
 // Containment is checked with a tolerance of 1e-9 of the root's size: the oriented fits are
-// computed in floating point and padded outward, not exact.
+// computed in floating point and padded outward, not exact. Tight trees need only keep every
+// facet inside its ancestors.
 TYPED_TEST(Methods, TreeInvariants) {
   {
+    const Containment containment =
+        TypeParam::fit == ParentFit::fit_facets ? Containment::facets_in_ancestors : Containment::children_in_parent;
     for (const auto& [name, mesh] : procedural_meshes()) {
-      const Tree<TypeParam> tree = build_for_test<TypeParam>(mesh);
-      EXPECT_EQ(validate_tree(tree, 1e-9), "") << name;
+      const auto tree = TypeParam::build(mesh);
+      EXPECT_EQ(validate_tree(tree, 1e-9, containment), "") << name;
       const std::size_t n = mesh.facet_count();
       if (n > 1) {
         EXPECT_LE(tree.height(), int(std::ceil(std::log(double(n)) / std::log(4.0 / 3.0)))) << name;
@@ -56,40 +78,29 @@ TYPED_TEST(Methods, TreeInvariants) {
 
 TYPED_TEST(Methods, RaysMatchBruteForce) {
   {
-    for (const auto& [name, mesh] : procedural_meshes()) check_rays(build_for_test<TypeParam>(mesh), 120, 3, name);
+    for (const auto& [name, mesh] : procedural_meshes()) check_rays(TypeParam::build(mesh), 120, 3, name);
   }
 }
 
 TYPED_TEST(Methods, WatertightRays) {
   {
-    check_watertight<TypeParam>(make_bumpy_sphere(24, 12, 0.1, 3), Vec3::Zero(), "bumpy_sphere", 1000);
+    using V = typename TypeParam::Volume;
+    check_watertight<V>(make_bumpy_sphere(24, 12, 0.1, 3), Vec3::Zero(), "bumpy_sphere", 1000, TypeParam::settings());
     const TriangleMesh solid = make_closed_terrain(8, 2);
-    check_watertight<TypeParam>(solid, inside_point(solid), "closed terrain", 1000);
+    check_watertight<V>(solid, inside_point(solid), "closed terrain", 1000, TypeParam::settings());
   }
 }
 
 TYPED_TEST(Methods, OverlapsMatchBruteForce) {
   {
-    for (const auto& [name, mesh] : procedural_meshes()) check_overlaps(build_for_test<TypeParam>(mesh), 15, name);
+    for (const auto& [name, mesh] : procedural_meshes()) check_overlaps(TypeParam::build(mesh), 15, name);
   }
 }
 
 TYPED_TEST(Methods, PlanesAndStabbingMatchBruteForce) {
   {
-    for (const auto& [name, mesh] : procedural_meshes()) {
-      const Tree<TypeParam> tree = build_for_test<TypeParam>(mesh);
-      const Aabb box = mesh_bounds(mesh);
-      Random r(31);
-      for (int i = 0; i < 40; ++i) {
-        Plane plane{i % 8 == 0 ? Vec3(Vec3::Unit(i % 3)) : r.unit_vector(), 0};
-        plane.offset = plane.normal.dot(random_point_near(r, box, 0.05));
-        EXPECT_EQ(query_plane(tree, plane), brute_plane(mesh, plane)) << name << " plane " << i;
-        Vec3 p = i % 2 ? mesh.corner(FacetId(r.next() % mesh.facet_count()), 0) : random_point_near(r, box);
-        std::size_t expected = 0;
-        for (NodeIndex node = 0; node < tree.node_count(); ++node) expected += contains(tree.volume(node), p);
-        EXPECT_EQ(stabbing_count(tree, p), expected) << name;
-      }
-    }
+    for (const auto& [name, mesh] : procedural_meshes())
+      check_planes_and_stabbing(TypeParam::build(mesh), 40, name);
   }
 }
 
@@ -102,19 +113,9 @@ TYPED_TEST(Methods, CollideMatchesBruteForce) {
     };
     std::size_t total = 0;
     for (const auto& [mesh_a, mesh_b] : pairs) {
-      const Tree<TypeParam> a = build_for_test<TypeParam>(mesh_a);
-      const Tree<TypeParam> b = build_for_test<TypeParam>(mesh_b);
-      Random r(5);
-      for (int pose = 0; pose < 6; ++pose) {
-        RigidTransform t;
-        if (pose > 0) {
-          t.rotation = random_rotation(r);
-          t.translation = r.uniform_vec3(-0.5, 0.5);
-        }
-        const std::vector<FacetPair> got = collide(a, b, t);
-        EXPECT_EQ(got, brute_collide(mesh_a, mesh_b, t)) << "pose " << pose;
-        total += got.size();
-      }
+      const auto a = TypeParam::build(mesh_a);
+      const auto b = TypeParam::build(mesh_b);
+      total += check_collide(a, b, 6, 0.5, "pair");
     }
     EXPECT_GT(total, 0u);
   }
@@ -124,7 +125,17 @@ TEST(Methods, NamesParseAndRoundTrip) {
   for (const std::string& name : method_names()) EXPECT_EQ(method_name(parse_method(name)), name);
   EXPECT_EQ(method_name(parse_method("pie-min+aabb@4")), "pie-min+aabb@4");
   EXPECT_EQ(parse_method("obb-max+aabb@2").hybrid_level, 2);
-  for (const char* bad : {"", "octree", "aabb+aabb@3", "pie-min+aabb@", "pie-min+aabb@0", "pie-min+aabb@x", "pie-min+obb@2"}) {
+  for (const std::string& name : method_names()) {
+    if (name == "aabb") continue;
+    const Method tight = parse_method(name + "-tight+aabb@5");
+    EXPECT_TRUE(tight.tight);
+    EXPECT_EQ(tight.hybrid_level, 5);
+    EXPECT_EQ(method_name(tight), name + "-tight+aabb@5");
+    EXPECT_EQ(settings_for(parse_method(name + "-tight")).parent_fit, ParentFit::fit_facets);
+    EXPECT_EQ(settings_for(parse_method(name)).parent_fit, ParentFit::enclose_children);
+  }
+  for (const char* bad : {"", "octree", "aabb+aabb@3", "pie-min+aabb@", "pie-min+aabb@0", "pie-min+aabb@x", "pie-min+obb@2",
+                          "aabb-tight", "-tight", "obb-min-tight-tight", "obb-min+aabb@3-tight"}) {
     try {
       parse_method(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -153,6 +164,33 @@ TEST(Methods, HybridSwitchesAtItsLevel) {
   }
   for (NodeIndex i = 0; i < tree.node_count(); ++i) EXPECT_EQ(tree.volume(i).is_box, level[i] >= 4) << i;
   EXPECT_THROW(build_tree<Hybrid<PieMin>>(make_terrain(4, 4, 1)), Error);  // no level given
+}
+
+// ParentFit::fit_facets keeps the tree's shape and makes the volumes no larger node by node (it
+// keeps the children's rule where that is smaller); on a curved surface it makes the upper
+// levels much smaller, since the slack of each level is no longer carried upward.
+TEST(Methods, TightParentsAreNeverLargerAndShrinkUpperLevels) {
+  const TriangleMesh sphere = make_bumpy_sphere(48, 24, 0.05, 7);
+  BuildSettings tight;
+  tight.parent_fit = ParentFit::fit_facets;
+  const Tree<ObbMin> paper = build_tree<ObbMin>(sphere);
+  const Tree<ObbMin> fitted = build_tree<ObbMin>(sphere, tight);
+  ASSERT_EQ(paper.node_count(), fitted.node_count());
+  Real paper_total = 0, fitted_total = 0;
+  for (NodeIndex i = 0; i < paper.node_count(); ++i) {
+    ASSERT_EQ(paper.is_leaf(i), fitted.is_leaf(i));
+    if (paper.is_leaf(i)) continue;
+    EXPECT_EQ(paper.first_child(i), fitted.first_child(i));
+    EXPECT_LE(surface_area(fitted.volume(i)), surface_area(paper.volume(i))) << i;
+    paper_total += surface_area(paper.volume(i));
+    fitted_total += surface_area(fitted.volume(i));
+  }
+  EXPECT_LT(fitted_total, 0.9 * paper_total);
+  // Pie slices: the same, and hulls too large for the triangle fit keep the children's rule.
+  const Tree<PieMinGeneral> pie_paper = build_tree<PieMinGeneral>(sphere);
+  const Tree<PieMinGeneral> pie_fitted = build_tree<PieMinGeneral>(sphere, tight);
+  for (NodeIndex i = 0; i < pie_paper.node_count(); ++i)
+    EXPECT_LE(surface_area(pie_fitted.volume(i)), surface_area(pie_paper.volume(i))) << i;
 }
 
 }  // namespace

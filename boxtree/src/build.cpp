@@ -13,8 +13,11 @@
 #include "boxtree/build.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <numeric>
+#include <optional>
+#include <type_traits>
 
 #include "boxtree/detail/volume_kinds.h"
 
@@ -196,33 +199,92 @@ void greedy_matching(const std::vector<Candidate>& candidates, std::size_t m, st
 }
 
 // The hybrid of a tree (volume/hybrid.h): the same topology, with the volumes of nodes at
-// `level` and above replaced by the smallest boxes enclosing their children. Children always
-// have larger indices than their parent (depth-first layout), so one backward pass sees every
-// child before its parent.
+// `level` and above replaced by the smallest boxes enclosing their children's volumes, or, with
+// `facet_boxes`, the leaf volumes below them. Children always have larger indices than their parent
+// (depth-first layout), so one backward pass sees every child before its parent.
 template <class Lower>
-Tree<Hybrid<Lower>> make_hybrid(const Tree<Lower>& tree, int level) {
+Tree<Hybrid<Lower>> make_hybrid(const Tree<Lower>& tree, int level, bool facet_boxes) {
   const std::size_t count = tree.node_count();
   std::vector<int> height(count, 0);
+  std::vector<Aabb> facets_box(facet_boxes ? count : 0);
   std::vector<Hybrid<Lower>> volumes(count);
   std::vector<std::uint32_t> links(count);
   for (std::size_t i = count; i-- > 0;) {
     const NodeIndex node = NodeIndex(i);
     if (tree.is_leaf(node)) {
       links[i] = Tree<Hybrid<Lower>>::kLeafFlag | tree.facet(node);
+      if (facet_boxes) facets_box[i] = bounding_aabb(tree.volume(node));
     } else {
       const NodeIndex c = tree.first_child(node);
       BOXTREE_ASSERT(c > node, "children follow their parent in the layout");
       links[i] = c;
       height[i] = 1 + std::max(height[c], height[c + 1]);
+      if (facet_boxes) facets_box[i] = Aabb::enclosing(facets_box[c], facets_box[c + 1]);
     }
     if (height[i] >= level && !tree.is_leaf(node)) {
       const NodeIndex c = tree.first_child(node);
-      volumes[i] = Hybrid<Lower>::upper(Aabb::enclosing(volumes[c].bounds(), volumes[c + 1].bounds()));
+      volumes[i] = Hybrid<Lower>::upper(facet_boxes ? facets_box[i]
+                                                    : Aabb::enclosing(volumes[c].bounds(), volumes[c + 1].bounds()));
     } else {
       volumes[i] = Hybrid<Lower>{tree.volume(node), Aabb(), false};
     }
   }
   return Tree<Hybrid<Lower>>(tree.shared_mesh(), std::move(volumes), std::move(links), tree.height());
+}
+
+// The corners of a leaf volume: ParentFit::fit_facets fits parents to these rather than to the
+// facets, so that leaf volumes (which may be larger than their facets: a leaf box is the facet's
+// enclosing rectangle) stay inside their ancestors and a descent finds every leaf volume that
+// meets a query (FacetTest::leaf_volume).
+template <PrincipalAxis K>
+std::array<Vec3, 8> leaf_corners(const OrientedBox<K>& leaf) {
+  return corners(leaf.box);
+}
+template <PrincipalAxis K, TriangleRule R>
+std::array<Vec3, 6> leaf_corners(const PieSlice<K, R>& leaf) {
+  return corners(leaf.prism);
+}
+
+// ParentFit::fit_facets: each parent's volume refitted to the corners of the leaf volumes below
+// it, where that is smaller (by the build's cost) than the volume around its children.
+template <class Volume>
+void fit_parents_to_facets(std::vector<Volume>& volumes, const std::vector<std::uint32_t>& links, MergeCost cost) {
+  const std::uint32_t leaf_flag = Tree<Volume>::kLeafFlag;
+  const std::size_t count = volumes.size();
+  // Leaves in depth-first order: the leaves below a node are the run [begin, end) of `leaves`.
+  std::vector<std::uint32_t> leaves;
+  leaves.reserve((count + 1) / 2);
+  std::vector<std::uint32_t> begin(count), end(count);
+  std::vector<std::pair<std::uint32_t, bool>> stack = {{0u, false}};
+  while (!stack.empty()) {
+    const auto [node, done] = stack.back();
+    stack.pop_back();
+    if (done) {
+      end[node] = std::uint32_t(leaves.size());
+      continue;
+    }
+    begin[node] = std::uint32_t(leaves.size());
+    if (links[node] & leaf_flag) {
+      leaves.push_back(node);
+      end[node] = std::uint32_t(leaves.size());
+      continue;
+    }
+    stack.push_back({node, true});
+    stack.push_back({links[node] + 1, false});
+    stack.push_back({links[node], false});
+  }
+  const auto cost_of = [&](const Volume& v) { return cost == MergeCost::volume ? volume(v) : surface_area(v); };
+  std::vector<Vec3> points;
+  for (std::uint32_t node = 0; node < count; ++node) {
+    if (links[node] & leaf_flag) continue;
+    points.clear();
+    for (std::uint32_t k = begin[node]; k < end[node]; ++k) {
+      const auto c = leaf_corners(volumes[leaves[k]]);
+      points.insert(points.end(), c.begin(), c.end());
+    }
+    const std::optional<Volume> fitted = Volume::fitted(points.data(), points.size());
+    if (fitted && cost_of(*fitted) < cost_of(volumes[node])) volumes[node] = *fitted;
+  }
 }
 
 }  // namespace
@@ -232,7 +294,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
                         BuildStats* stats) {
   if constexpr (is_hybrid_v<Volume>) {
     if (settings.hybrid_level < 1) throw Error("build_tree: a hybrid method needs hybrid_level >= 1");
-    return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level);
+    return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
+                       settings.parent_fit == ParentFit::fit_facets);
   }
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
@@ -357,6 +420,9 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     stack.push_back({first[node], child_slot});
   }
   const int height = heights[active[0]];
+  if constexpr (!std::is_same_v<Volume, Aabb> && !is_hybrid_v<Volume>) {
+    if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out_volumes, out_links, settings.cost);
+  }
 
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = local;

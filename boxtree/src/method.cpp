@@ -21,7 +21,7 @@ constexpr std::array<std::pair<const char*, VolumeKind>, 8> kNames = {{
 std::string valid_list() {
   std::string valid;
   for (const auto& [name, kind] : kNames) valid += std::string(valid.empty() ? "" : ", ") + name;
-  return valid + ", and hybrids M+aabb@L (e.g. pie-min+aabb@4)";
+  return valid + ", the suffix -tight on oriented methods (e.g. obb-min-tight), and hybrids M+aabb@L (e.g. pie-min+aabb@4)";
 }
 }  // namespace
 
@@ -35,6 +35,7 @@ std::string method_name(const Method& method) {
   std::string base = "?";
   for (const auto& [name, kind] : kNames)
     if (kind == method.kind) base = name;
+  if (method.tight) base += "-tight";
   return method.hybrid_level > 0 ? base + "+aabb@" + std::to_string(method.hybrid_level) : base;
 }
 
@@ -51,11 +52,18 @@ Method parse_method(const std::string& name) {
       throw Error("method '" + name + "': the hybrid level after '@' must be an integer from 1 to 1000");
     method.hybrid_level = int(value);
   }
+  const std::string tight_suffix = "-tight";
+  if (base.size() > tight_suffix.size() && base.compare(base.size() - tight_suffix.size(), tight_suffix.size(), tight_suffix) == 0) {
+    base.resize(base.size() - tight_suffix.size());
+    method.tight = true;
+  }
   for (const auto& [n, kind] : kNames)
     if (base == n) {
       method.kind = kind;
       if (kind == VolumeKind::aabb && method.hybrid_level > 0)
         throw Error("method '" + name + "': aabb is axis-aligned already; hybrids combine an oriented method with aabb");
+      if (kind == VolumeKind::aabb && method.tight)
+        throw Error("method '" + name + "': aabb parents are exact already; -tight applies to oriented methods");
       return method;
     }
   throw Error("unknown method '" + name + "' (valid methods: " + valid_list() + ")");
@@ -63,6 +71,7 @@ Method parse_method(const std::string& name) {
 
 BuildSettings settings_for(const Method& method, BuildSettings settings) {
   settings.hybrid_level = method.hybrid_level;
+  if (method.tight) settings.parent_fit = ParentFit::fit_facets;
   return settings;
 }
 

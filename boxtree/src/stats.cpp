@@ -74,7 +74,7 @@ TreeStats compute_tree_stats(const Tree<Volume>& tree) {
 }
 
 template <class Volume>
-std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
+std::string validate_tree(const Tree<Volume>& tree, Real tolerance, Containment containment) {
   std::ostringstream problem;
   const std::size_t n = tree.facet_count();
   if (tree.empty()) return n == 0 ? "" : "tree has no nodes";
@@ -89,6 +89,7 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
 
   std::vector<int> seen_node(tree.node_count(), 0);
   std::vector<int> seen_facet(n, 0);
+  std::vector<NodeIndex> parent(tree.node_count(), tree.root());
   // Walk without trusting the links: check each before following it.
   std::vector<NodeIndex> stack{tree.root()};
   while (!stack.empty()) {
@@ -111,6 +112,16 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
           problem << "leaf " << node << " does not contain corner " << k << " of facet " << f;
           return problem.str();
         }
+      if (containment == Containment::facets_in_ancestors) {
+        for (NodeIndex up = node; up != tree.root();) {
+          up = parent[up];
+          for (int k = 0; k < 3; ++k)
+            if (!contains(tree.volume(up), tree.mesh().corner(f, k), tol)) {
+              problem << "node " << up << " does not contain corner " << k << " of facet " << f << " below it";
+              return problem.str();
+            }
+        }
+      }
       continue;
     }
     const NodeIndex c = tree.first_child(node);
@@ -118,8 +129,9 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
       problem << "node " << node << " has child link " << c;
       return problem.str();
     }
+    parent[c] = parent[c + 1] = node;
     for (NodeIndex child : {c, c + 1})
-      if (!contains(tree.volume(node), tree.volume(child), tol)) {
+      if (containment == Containment::children_in_parent && !contains(tree.volume(node), tree.volume(child), tol)) {
         problem << "volume of node " << child << " is not inside its parent " << node;
         return problem.str();
       }
@@ -146,7 +158,7 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance) {
 
 #define BOXTREE_INSTANTIATE_STATS(V)                         \
   template TreeStats compute_tree_stats<V>(const Tree<V>&); \
-  template std::string validate_tree<V>(const Tree<V>&, Real);
+  template std::string validate_tree<V>(const Tree<V>&, Real, Containment);
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_STATS)
 
 }  // namespace boxtree

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "boxtree/detail/fit.h"
+#include "boxtree/error.h"
 #include "boxtree/geometry.h"
 #include "boxtree/volume/obb.h"
 #include "internal.h"
@@ -69,17 +70,17 @@ bool obb_obb(const Obb& a, const Obb& b) {
 constexpr Real kParentPad = 128 * kEpsilon;
 constexpr Real kCornerPad = 8 * kEpsilon;
 enum class Padding { leaf, parent };
-Obb fit_box(const Mat3& axes, const Vec3* points, int count, const Vec3& reference, Padding padding) {
+Obb fit_box(const Mat3& axes, const Vec3* points, std::size_t count, const Vec3& reference, Padding padding) {
   Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity());
   Vec3 hi = -lo;
-  for (int k = 0; k < count; ++k) {
+  for (std::size_t k = 0; k < count; ++k) {
     const Vec3 x = axes.transpose() * (points[k] - reference);
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
   }
   Obb box{reference + axes * ((lo + hi) * Real(0.5)), axes, Vec3::Zero()};
   Real spread = 0, magnitude = 0;
-  for (int k = 0; k < count; ++k) {
+  for (std::size_t k = 0; k < count; ++k) {
     const Vec3 x = to_local(box, points[k]).cwiseAbs();
     box.half_extents = box.half_extents.cwiseMax(x);
     spread = std::max(spread, x.maxCoeff());
@@ -341,20 +342,25 @@ Obb obb_enclosing(const Obb& x, const Obb& y, PrincipalAxis axis) {
   const auto cy = corners(y);
   std::copy(cx.begin(), cx.end(), points);
   std::copy(cy.begin(), cy.end(), points + 8);
+  return obb_enclosing_points(points, 16, axis);
+}
+
+Obb obb_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis) {
+  BOXTREE_ASSERT(count > 0, "obb_enclosing_points: no points");
   Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : points) centroid += p;
-  centroid /= 16;
-  const Mat3 principal = detail::principal_axes(points, 16);
-  if (axis == PrincipalAxis::all) return fit_box(principal, points, 16, centroid, Padding::parent);
+  for (std::size_t k = 0; k < count; ++k) centroid += points[k];
+  centroid /= Real(count);
+  const Mat3 principal = detail::principal_axes(points, count);
+  if (axis == PrincipalAxis::all) return fit_box(principal, points, count, centroid, Padding::parent);
 
   // max / min: one axis is the largest / smallest principal component; the other two are the
-  // axes of the minimum-area rectangle enclosing the corners projected on the plane normal to it.
+  // axes of the minimum-area rectangle enclosing the points projected on the plane normal to it.
   const int fixed = axis == PrincipalAxis::max ? 0 : 2;
   const Vec3 u = principal.col(fixed == 0 ? 1 : 0);
   const Vec3 v = principal.col(fixed == 0 ? 2 : 1);
-  std::vector<detail::Vec2> planar(16);
-  for (int k = 0; k < 16; ++k) planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
-  return fit_box(frame_from_rectangle(u, v, detail::min_area_rectangle(planar)), points, 16, centroid,
+  std::vector<detail::Vec2> planar(count);
+  for (std::size_t k = 0; k < count; ++k) planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
+  return fit_box(frame_from_rectangle(u, v, detail::min_area_rectangle(planar)), points, count, centroid,
                  Padding::parent);
 }
 

@@ -408,26 +408,32 @@ Prism prism_from_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, TriangleRule rule) {
-  // Paper, Section 3.3: the 12 corners of the children; the sweep axis is their max (or min)
-  // principal component; the corners projected on the plane normal to it get a minimum-area
-  // enclosing triangle (isosceles: the paper's rule; general: O'Rourke et al.); the prism spans
-  // the corners' extent along the axis.
+  // Paper, Section 3.3: the 12 corners of the children as one population.
   Vec3 points[12];
   const auto cx = corners(x);
   const auto cy = corners(y);
   std::copy(cx.begin(), cx.end(), points);
   std::copy(cy.begin(), cy.end(), points + 6);
+  return *prism_enclosing_points(points, 12, axis, rule, 12);
+}
+
+std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis, TriangleRule rule,
+                                            std::size_t max_hull) {
+  // The sweep axis is the points' max (or min) principal component; the points projected on the
+  // plane normal to it get a minimum-area enclosing triangle (isosceles: the paper's rule;
+  // general: O'Rourke et al.); the prism spans the points' extent along the axis.
+  BOXTREE_ASSERT(count > 0, "prism_enclosing_points: no points");
   Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : points) centroid += p;
-  centroid /= 12;
-  const Mat3 principal = detail::principal_axes(points, 12);
+  for (std::size_t k = 0; k < count; ++k) centroid += points[k];
+  centroid /= Real(count);
+  const Mat3 principal = detail::principal_axes(points, count);
   const int fixed = axis == PrincipalAxis::min ? 2 : 0;
   const Vec3 a = principal.col(fixed);
   const Vec3 u = principal.col(fixed == 0 ? 1 : 0);
   const Vec3 v = principal.col(fixed == 0 ? 2 : 1);
-  std::vector<detail::Vec2> planar(12);
+  std::vector<detail::Vec2> planar(count);
   Real w_lo = kInf, w_hi = -kInf, spread = 0, magnitude = 0;
-  for (int k = 0; k < 12; ++k) {
+  for (std::size_t k = 0; k < count; ++k) {
     const Vec3 r = points[k] - centroid;
     planar[k] = detail::Vec2(u.dot(r), v.dot(r));
     const Real w = a.dot(r);
@@ -435,6 +441,11 @@ Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, Triang
     w_hi = std::max(w_hi, w);
     spread = std::max(spread, r.cwiseAbs().maxCoeff());
     magnitude = std::max(magnitude, points[k].cwiseAbs().maxCoeff());
+  }
+  // The triangle fits are cubic in the hull size (min_area_triangle): give up on large hulls.
+  if (count > max_hull) {
+    planar = detail::convex_hull_2d(std::move(planar));
+    if (planar.size() > max_hull) return std::nullopt;
   }
   const detail::Triangle2 triangle = rule == TriangleRule::isosceles ? detail::min_area_isosceles_triangle(planar)
                                                                : detail::min_area_triangle(planar);
@@ -455,8 +466,8 @@ Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, Triang
   const Real margin = kParentPad * spread + kCornerPad * magnitude;
   const auto encloses = [&](const Prism& p) {
     const PrismSlabs s = slabs_of(p);
-    for (const Vec3& q : points) {
-      if (!inside_slabs(s, q, -margin / 2)) return false;
+    for (std::size_t k = 0; k < count; ++k) {
+      if (!inside_slabs(s, points[k], -margin / 2)) return false;
     }
     return true;
   };
@@ -487,7 +498,7 @@ Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, Triang
       done = encloses(best);
     }
   }
-  BOXTREE_ASSERT(done, "prism_enclosing: could not enclose the children (non-finite input?)");
+  BOXTREE_ASSERT(done, "prism_enclosing_points: could not enclose the points (non-finite input?)");
   return best;
 }
 

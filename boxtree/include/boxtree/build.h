@@ -12,6 +12,19 @@ namespace boxtree {
 // proportional to the chance that a random plane cuts it, paper Section 4) or its volume.
 enum class MergeCost { surface_area, volume };
 
+// How a parent's volume is computed once the tree's shape is known.
+//  enclose_children: the paper's rule applied to the children's volumes (their 16 box corners or
+//    12 prism corners): every child lies inside its parent, but the slack of each level is
+//    carried into the next, so upper-level oriented volumes grow loose.
+//  fit_facets: the same rule applied to the leaf volumes below the node (the facets, or for boxes
+//    the facets' enclosing rectangles; as top-down builders such as FCL's fit every node to its
+//    primitives), keeping the children's volume where that is the smaller one. Every leaf volume
+//    lies inside every ancestor's volume (what the queries rely on), but an inner node's volume
+//    may stick out of its parent's. Costs O(n log n) more build time. Pie slices
+//    whose projected hull exceeds PieSlice::kMaxFittedHull points keep the children's rule.
+//    Hybrids: the upper boxes are the leaf volumes' exact bounding boxes. No effect on aabb (exact).
+enum class ParentFit { enclose_children, fit_facets };
+
 struct BuildSettings {
   MergeCost cost = MergeCost::surface_area;
   // Besides mesh adjacency, each node is offered as partner to its `near_window` successors in
@@ -25,6 +38,7 @@ struct BuildSettings {
   // For hybrid volume kinds (volume/hybrid.h) only: nodes at this level and above (level =
   // subtree height, leaves 0) get axis-aligned boxes. Must be >= 1 for hybrids.
   int hybrid_level = 0;
+  ParentFit parent_fit = ParentFit::enclose_children;
 };
 
 struct BuildStats {

@@ -5,7 +5,9 @@
 // Names (the CLI's --method): aabb, obb-all, obb-max, obb-min, pie-max, pie-min (the paper's six;
 // pie slices use its minimum-area isosceles triangle), pie-max-general, pie-min-general (pie
 // slices from the general minimum-area triangle), and hybrids "M+aabb@L": method M below level
-// L, axis-aligned boxes from level L up (levels count from the leaves, L >= 1).
+// L, axis-aligned boxes from level L up (levels count from the leaves, L >= 1). The suffix
+// "-tight" on an oriented method (e.g. "obb-min-tight", "pie-min-tight+aabb@6") fits parents
+// to the facets below them instead of to their children's volumes (ParentFit::fit_facets).
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +22,7 @@ enum class VolumeKind { aabb, obb_all, obb_max, obb_min, pie_max, pie_min, pie_m
 struct Method {
   VolumeKind kind = VolumeKind::aabb;
   int hybrid_level = 0;  // 0: not a hybrid; L >= 1: boxes from level L up
+  bool tight = false;    // parents fitted to the facets below them (ParentFit::fit_facets)
 };
 
 template <class Volume>

@@ -35,11 +35,17 @@ struct TreeStats {
 template <class Volume>
 TreeStats compute_tree_stats(const Tree<Volume>& tree);
 
+// What validate_tree requires of the volumes: every child volume inside its parent (trees built
+// with ParentFit::enclose_children), or only every facet inside all its ancestors' volumes (what
+// the queries rely on; trees built with ParentFit::fit_facets).
+enum class Containment { children_in_parent, facets_in_ancestors };
+
 // Checks every structural invariant and returns a description of the first violation, or an
 // empty string: 2n-1 nodes; every facet in exactly one leaf; every node reachable exactly once;
-// every child volume inside its parent (up to `tolerance`, relative to the root's size); every
-// leaf volume contains its facet's corners; the stored height is the real height.
+// containment as chosen (up to `tolerance`, relative to the root's size); every leaf volume
+// contains its facet's corners; the stored height is the real height.
 template <class Volume>
-std::string validate_tree(const Tree<Volume>& tree, Real tolerance = 1e-12);
+std::string validate_tree(const Tree<Volume>& tree, Real tolerance = 1e-12,
+                          Containment containment = Containment::children_in_parent);
 
 }  // namespace boxtree

@@ -6,6 +6,8 @@
 //          minimum-area rectangle enclosing the corners projected along it;
 //   min  - the same with the smallest principal component.
 // Leaf rule (all three): the minimum-area rectangle enclosing the facet, zero thickness.
+#include <optional>
+
 #include "boxtree/volume/aabb.h"
 #include "boxtree/volume/polytope.h"
 
@@ -35,6 +37,8 @@ bool intersect_ray(const Obb& box, const RayPrecomputed& ray, Real t_min, Real t
 // The fits (src/volume_obb.cpp).
 Obb obb_from_triangle(const Vec3& a, const Vec3& b, const Vec3& c);
 Obb obb_enclosing(const Obb& x, const Obb& y, PrincipalAxis axis);
+// The same parent rule applied to any point set (count >= 1), e.g. all facet vertices below a node.
+Obb obb_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis);
 
 namespace detail {
 // The leaf rules' frame of a facet (shared by obb_from_triangle and prism_from_triangle): an
@@ -52,6 +56,10 @@ struct OrientedBox {
                                                                          : "obb-min";
   static OrientedBox from_triangle(const Vec3& a, const Vec3& b, const Vec3& c) { return {obb_from_triangle(a, b, c)}; }
   static OrientedBox enclosing(const OrientedBox& x, const OrientedBox& y) { return {obb_enclosing(x.box, y.box, kAxis)}; }
+  // The parent rule applied to the facet vertices below a node (BuildSettings::parent_fit).
+  static std::optional<OrientedBox> fitted(const Vec3* points, std::size_t count) {
+    return OrientedBox{obb_enclosing_points(points, count, kAxis)};
+  }
 };
 
 using ObbAll = OrientedBox<PrincipalAxis::all>;

@@ -38,6 +38,10 @@ bool intersect_ray(const Prism& prism, const RayPrecomputed& ray, Real t_min, Re
 
 Prism prism_from_triangle(const Vec3& a, const Vec3& b, const Vec3& c);
 Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, TriangleRule rule);
+// The same parent rule applied to any point set (count >= 1). The triangle fits cost O(h^3) on
+// a projected hull of h points (the general rule, src/fit.cpp): nullopt when h > max_hull.
+std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis, TriangleRule rule,
+                                            std::size_t max_hull);
 
 template <PrincipalAxis kAxis, TriangleRule kRule>
 struct PieSlice {
@@ -48,6 +52,15 @@ struct PieSlice {
                                                : (kRule == TriangleRule::isosceles ? "pie-min" : "pie-min-general");
   static PieSlice from_triangle(const Vec3& a, const Vec3& b, const Vec3& c) { return {prism_from_triangle(a, b, c)}; }
   static PieSlice enclosing(const PieSlice& x, const PieSlice& y) { return {prism_enclosing(x.prism, y.prism, kAxis, kRule)}; }
+  // The parent rule applied to the facet vertices below a node (BuildSettings::parent_fit);
+  // nullopt when their projected hull is too large for the triangle fit (the build then keeps
+  // the children's rule for that node).
+  static constexpr std::size_t kMaxFittedHull = 64;
+  static std::optional<PieSlice> fitted(const Vec3* points, std::size_t count) {
+    auto prism = prism_enclosing_points(points, count, kAxis, kRule, kMaxFittedHull);
+    if (!prism) return std::nullopt;
+    return PieSlice{*prism};
+  }
 };
 
 using PieMax = PieSlice<PrincipalAxis::max, TriangleRule::isosceles>;
