@@ -20,6 +20,7 @@
 #include <type_traits>
 
 #include "boxtree/detail/volume_kinds.h"
+#include "boxtree/planar/terrain.h"
 
 namespace boxtree {
 namespace {
@@ -297,6 +298,7 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
                        settings.parent_fit == ParentFit::fit_facets);
   }
+  if (settings.strategy == BuildStrategy::terrain) return planar::build_terrain_tree<Volume>(std::move(mesh_ptr), stats);
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
   const TriangleMesh& mesh = *mesh_ptr;

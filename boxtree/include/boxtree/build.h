@@ -25,6 +25,8 @@ enum class MergeCost { surface_area, volume };
 //    Hybrids: the upper boxes are the leaf volumes' exact bounding boxes. No effect on aabb (exact).
 enum class ParentFit { enclose_children, fit_facets };
 
+enum class BuildStrategy { greedy, terrain };
+
 struct BuildSettings {
   MergeCost cost = MergeCost::surface_area;
   // Besides mesh adjacency, each node is offered as partner to its `near_window` successors in
@@ -39,6 +41,11 @@ struct BuildSettings {
   // subtree height, leaves 0) get axis-aligned boxes. Must be >= 1 for hybrids.
   int hybrid_level = 0;
   ParentFit parent_fit = ParentFit::enclose_children;
+  // Which pairs are merged: greedy (the default, above) or terrain, the paper's Section 3.1 rule
+  // (planar/terrain.h: Section 2's pairing of the vertical projection, for a terrain whose facets'
+  // projected bounding rectangles tile the plane, such as make_terrain; throws otherwise; parents
+  // always enclose their children, cost/near_window/max_neighbors/parent_fit do not apply).
+  BuildStrategy strategy = BuildStrategy::greedy;
 };
 
 struct BuildStats {

@@ -1,0 +1,205 @@
+// The planar boxtree: the pairing's invariants (Theorem 2.2), the tree, point location against
+// brute force on every generator, and the stabbing number against brute force.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "boxtree/error.h"
+#include "boxtree/generate.h"
+#include "boxtree/planar/partition.h"
+#include "boxtree/planar/planar_tree.h"
+
+namespace boxtree::planar {
+namespace {
+
+// Test sizes scale with BOXTREE_TEST_SCALE (default 1).
+std::size_t scaled(std::size_t n) {
+  const char* scale = std::getenv("BOXTREE_TEST_SCALE");
+  return scale ? std::size_t(std::max(1.0, double(n) * std::atof(scale))) : n;
+}
+
+struct Case {
+  std::string generator;
+  std::size_t count;
+  std::uint64_t seed;
+};
+
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  for (const std::string& name : partition_generator_names())
+    for (std::size_t count : {std::size_t(1), std::size_t(2), std::size_t(5), std::size_t(9), std::size_t(64), scaled(700), scaled(3000)})
+      out.push_back({name, count, 1000 + count});
+  return out;
+}
+
+// Checks the invariants of one build: every round pairs at least (m + 3) / 12 of its m cells
+// (Theorem 2.2 with the halving for disjointness), pairs of a round are disjoint and made of
+// nodes that existed before the round, the shortened cells stay a partition (check_rounds
+// asserts it), no fallback was needed, and the tree is valid (parents enclose children).
+void check_build(const std::vector<Rect>& cells, const std::string& what) {
+  SCOPED_TRACE(what);
+  PlanarBuildSettings settings;
+  settings.check_rounds = true;
+  PlanarBuildStats stats;
+  const std::vector<PlanarMerge> merges = planar_pairing(cells, settings, &stats);
+  EXPECT_EQ(stats.fallback_rounds, 0);
+  ASSERT_EQ(merges.size(), cells.size() - 1);
+  const std::size_t n = cells.size();
+  std::size_t done = 0;
+  for (std::size_t r = 0; r < stats.rounds.size(); ++r) {
+    const PlanarRoundStats& round = stats.rounds[r];
+    EXPECT_GE(12 * round.pairs, round.cells + 3) << "round " << r << " of " << round.cells << " cells paired "
+                                                 << round.pairs << " (" << round.low_degree_segments
+                                                 << " low-degree segments, " << round.offers << " offers)";
+    std::set<std::uint32_t> used;
+    for (std::size_t k = done; k < done + round.pairs; ++k) {
+      for (std::uint32_t child : {merges[k].first, merges[k].second}) {
+        EXPECT_LT(child, n + done) << "a pair uses a node made in the same round";
+        EXPECT_TRUE(used.insert(child).second) << "pairs of one round share node " << child;
+      }
+    }
+    done += round.pairs;
+  }
+  EXPECT_EQ(done, merges.size());
+
+  const PlanarTree tree = build_planar_tree(cells);
+  EXPECT_NO_THROW(validate_planar_tree(tree));
+  EXPECT_EQ(tree.domain(), bounding_rect(cells));
+  // Each round adds at most one level.
+  EXPECT_LE(tree.height(), int(stats.rounds.size()));
+  EXPECT_GE(tree.height(), int(std::ceil(std::log2(double(n)))));
+}
+
+TEST(PlanarTree, PairingInvariantsOnEveryGenerator) {
+  for (const Case& c : cases()) check_build(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
+}
+
+TEST(PlanarTree, PairingInvariantsOnManySmallPartitions) {
+  for (std::uint64_t seed = 0; seed < scaled(300); ++seed) {
+    const std::vector<std::string> names = partition_generator_names();
+    const std::string name = names[seed % names.size()];
+    check_build(make_partition(name, 3 + seed % 40, seed), name + " seed " + std::to_string(seed));
+  }
+}
+
+// Point location against a scan of every cell, at random points, at every cell corner and edge
+// midpoint (points shared by several cells: the half-open rule picks one), and outside.
+void check_locate(const std::vector<Rect>& cells, const std::string& what) {
+  SCOPED_TRACE(what);
+  const PlanarTree tree = build_planar_tree(cells);
+  const Rect domain = tree.domain();
+  std::vector<Vec2> points;
+  Random random(cells.size());
+  for (int i = 0; i < 300; ++i)
+    points.emplace_back(random.uniform(domain.min.x() - 0.1, domain.max.x() + 0.1),
+                        random.uniform(domain.min.y() - 0.1, domain.max.y() + 0.1));
+  const std::size_t stride = std::max<std::size_t>(1, cells.size() / 200);
+  for (std::size_t i = 0; i < cells.size(); i += stride) {
+    const Rect& c = cells[i];
+    points.push_back(c.min);
+    points.push_back(c.max);
+    points.emplace_back(c.min.x(), c.max.y());
+    points.emplace_back(c.max.x(), c.min.y());
+    points.emplace_back(c.center().x(), c.min.y());
+    points.emplace_back(c.min.x(), c.center().y());
+    points.push_back(c.center());
+  }
+  for (const Vec2& p : points) {
+    const std::optional<RectId> expected = locate_point_brute_force(cells, p);
+    PlanarQueryStats stats;
+    const std::optional<RectId> got = locate_point(tree, p, &stats);
+    ASSERT_EQ(got, expected) << "at (" << p.x() << ", " << p.y() << ")";
+    if (expected) {
+      EXPECT_TRUE(cell_contains_half_open(cells[*expected], domain, p));
+      EXPECT_GE(stats.nodes_visited, std::uint64_t(tree.height() > 0 ? 2 : 1));
+    }
+  }
+}
+
+TEST(PlanarTree, PointLocationMatchesBruteForceOnEveryGenerator) {
+  for (const Case& c : cases()) check_locate(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
+}
+
+TEST(PlanarTree, PointLocationOnAGridCellCorners) {
+  // Every grid vertex is a cross junction shared by four cells.
+  const std::vector<Rect> cells = make_grid_partition(7, 5);
+  const PlanarTree tree = build_planar_tree(cells);
+  for (int i = 0; i <= 7; ++i)
+    for (int j = 0; j <= 5; ++j) {
+      const Vec2 p(Real(i) / 7, Real(j) / 5);
+      EXPECT_EQ(locate_point(tree, p), locate_point_brute_force(cells, p));
+      EXPECT_TRUE(locate_point(tree, p).has_value());
+    }
+}
+
+// The stabbing number by the sweep equals the maximum of point_depth over the centres of the
+// grid cells of all box coordinates (where the maximum of open boxes is attained).
+TEST(PlanarTree, StabbingNumberMatchesBruteForce) {
+  for (const std::string& name : partition_generator_names()) {
+    for (std::size_t count : {1, 2, 6, 20, 45}) {
+      const PlanarTree tree = build_planar_tree(make_partition(name, count, 77 + count));
+      std::vector<Real> xs, ys;
+      for (std::size_t i = 0; i < tree.node_count(); ++i) {
+        const Rect& b = tree.box(PlanarNode(i));
+        xs.insert(xs.end(), {b.min.x(), b.max.x()});
+        ys.insert(ys.end(), {b.min.y(), b.max.y()});
+      }
+      std::sort(xs.begin(), xs.end());
+      xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+      std::sort(ys.begin(), ys.end());
+      ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
+      std::size_t brute = 0;
+      for (std::size_t i = 0; i + 1 < xs.size(); ++i)
+        for (std::size_t j = 0; j + 1 < ys.size(); ++j)
+          brute = std::max(brute, point_depth(tree, Vec2((xs[i] + xs[i + 1]) / 2, (ys[j] + ys[j + 1]) / 2)));
+      EXPECT_EQ(stabbing_number(tree), brute) << name << " " << count;
+      // A point lies in its leaf and in every ancestor's box at least.
+      EXPECT_GE(stabbing_number(tree), std::size_t(1));
+    }
+  }
+}
+
+TEST(PlanarTree, SingleCell) {
+  const PlanarTree tree = build_planar_tree({Rect::from_bounds(2, 3, 4, 5)});
+  EXPECT_EQ(tree.node_count(), 1u);
+  EXPECT_EQ(tree.height(), 0);
+  EXPECT_EQ(locate_point(tree, Vec2(3, 4)), std::optional<RectId>(0));
+  EXPECT_EQ(locate_point(tree, Vec2(4, 5)), std::optional<RectId>(0));  // the domain's max sides are closed
+  EXPECT_EQ(locate_point(tree, Vec2(5, 4)), std::nullopt);
+  EXPECT_EQ(stabbing_number(tree), 1u);
+}
+
+TEST(PlanarTree, InvalidInputIsRejected) {
+  std::vector<Rect> overlapping = make_grid_partition(4, 4);
+  overlapping[5].max.y() += 0.1;
+  EXPECT_THROW(build_planar_tree(overlapping), Error);
+  std::vector<Rect> holed = make_grid_partition(4, 4);
+  holed.erase(holed.begin() + 6);
+  EXPECT_THROW(build_planar_tree(holed), Error);
+  EXPECT_THROW(build_planar_tree({}), Error);
+  PlanarBuildSettings bad;
+  bad.max_segment_degree = 1;
+  EXPECT_THROW(build_planar_tree(make_grid_partition(2, 2), bad), Error);
+}
+
+TEST(PlanarTree, DeterministicAndMovedDomain) {
+  // The same partition moved and scaled gives the same topology.
+  std::vector<Rect> cells = make_pinwheel_partition(200, 9);
+  const PlanarTree a = build_planar_tree(cells);
+  for (Rect& c : cells) {
+    c.min = c.min * 8 + Vec2(-3, 100);
+    c.max = c.max * 8 + Vec2(-3, 100);
+  }
+  const PlanarTree b = build_planar_tree(cells);
+  ASSERT_EQ(a.node_count(), b.node_count());
+  for (std::size_t i = 0; i < a.node_count(); ++i) {
+    ASSERT_EQ(a.is_leaf(PlanarNode(i)), b.is_leaf(PlanarNode(i)));
+    if (a.is_leaf(PlanarNode(i))) {
+      EXPECT_EQ(a.cell_id(PlanarNode(i)), b.cell_id(PlanarNode(i)));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace boxtree::planar
