@@ -28,6 +28,12 @@ class Simulation {
   // Seconds spent in collision detection so far (Bullet: performDiscreteCollisionDetection, i.e.
   // AABB update, broadphase, midphase and narrowphase; ODE: dSpaceCollide with the near callback).
   virtual double collision_seconds() const = 0;
+  // Triangles handed to the narrowphase so far, for the benchmarks (bench/sim). Bullet builtin:
+  // the terrain's convex-triangle callbacks (btConvexTriangleCallback; GImpact's mesh-mesh work is
+  // not counted); boxtree: the adapter's counters of every mesh shape (narrowphase triangles).
+  // ODE builtin: the triangles OPCODE hands to the colliders (dGeomTriMeshSetCallback); boxtree:
+  // the candidate facets of every boxtree geom.
+  virtual std::uint64_t narrowphase_triangles() const = 0;
   // What handles the triangle meshes, for the summary.
   virtual std::string midphase_description() const = 0;
 };

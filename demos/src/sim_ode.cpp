@@ -143,15 +143,31 @@ class OdeSimulation final : public Simulation {
 
   int contacts() const override { return contacts_; }
   double collision_seconds() const override { return collision_seconds_; }
+  std::uint64_t narrowphase_triangles() const override {
+    std::uint64_t total = builtin_triangles_;
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_)
+      for (dGeomID geom : mesh_geoms_) total += boxtree::ode::geom_counters(geom).candidate_facets;
+#endif
+    return total;
+  }
   std::string midphase_description() const override {
     return boxtree_ ? "dCreateBoxtreeMesh (terrain and meshes)" : "dCreateTriMesh, OPCODE (terrain and meshes)";
   }
 
  private:
+  // OPCODE's per-triangle callback: called for every triangle it hands to a collider; 1 = keep it.
+  static int count_triangle(dGeomID mesh, dGeomID, int) {
+    ++static_cast<OdeSimulation*>(dGeomGetData(mesh))->builtin_triangles_;
+    return 1;
+  }
+
   dGeomID create_mesh_geom(const std::shared_ptr<const TriangleMesh>& mesh, const std::string& method) {
     if (boxtree_) {
 #if BOXTREE_DEMO_HAVE_ODE_ADAPTER
-      return dCreateBoxtreeMesh(space_, mesh, method.c_str());
+      dGeomID geom = dCreateBoxtreeMesh(space_, mesh, method.c_str());
+      mesh_geoms_.push_back(geom);
+      return geom;
 #endif
     }
     (void)method;
@@ -165,7 +181,9 @@ class OdeSimulation final : public Simulation {
                                 data->indices.data(), int(data->indices.size()), 3 * sizeof(dTriIndex));
     // ODE's convex-vs-trimesh collider needs the face angles (it aborts without them).
     dGeomTriMeshDataPreprocess2(data->data, 1U << dTRIDATAPREPROCESS_BUILD_FACE_ANGLES, nullptr);
-    dGeomID geom = dCreateTriMesh(space_, data->data, nullptr, nullptr, nullptr);
+    dGeomID geom = dCreateTriMesh(space_, data->data, &OdeSimulation::count_triangle, nullptr, nullptr);
+    dGeomSetData(geom, this);
+    mesh_geoms_.push_back(geom);
     mesh_data_.push_back(std::move(data));
     return geom;
   }
@@ -228,6 +246,8 @@ class OdeSimulation final : public Simulation {
   std::vector<dGeomID> convex_geoms_;
   int contacts_ = 0;
   double collision_seconds_ = 0;
+  std::vector<dGeomID> mesh_geoms_;     // terrain and mesh bodies
+  std::uint64_t builtin_triangles_ = 0;  // counted by count_triangle (builtin only)
 };
 
 }  // namespace

@@ -1,0 +1,197 @@
+// The drop scene (the demo's: mixed bodies falling into a terrain bowl) in Bullet and ODE, with
+// each engine's built-in triangle-mesh midphase and with boxtree's, in one process on the same
+// scene (demos/src/scene.h, sim.h: the demo's own worlds, without rendering).
+//
+// Per engine, terrain size and body count, the built-in run is the peer of every boxtree method:
+//   contacts_per_step       contact points in the step (Bullet: manifold points; ODE: joints);
+//                           trajectories diverge between runs (contact is chaotic), so the ratio
+//                           is statistical agreement, not identity;
+//   narrowphase_triangles_per_step   triangles handed to per-triangle contact routines (sim.h);
+//   collision_ms_per_step   collision detection (Bullet: performDiscreteCollisionDetection;
+//                           ODE: dSpaceCollide with the near callback);
+//   step_ms                 the whole step (collision, solver, integration);
+//   build_seconds           creating the world, the terrain's hierarchy included.
+// Per-step figures are means over the steps after the first third (most bodies have landed).
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "boxtree/error.h"
+#include "boxtree/method.h"
+#include "scene.h"
+#include "sim.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kTimeStep = 1.0 / 60;
+
+struct Config {
+  int cells = 128;  // terrain cells per side: 2 * cells^2 facets
+  int bodies = 100;
+  bool all_methods = true;  // oriented builds are slow on the largest terrains: aabb only there
+};
+
+struct Measure {
+  double contacts = 0, triangles = 0, collision_ms = 0, step_ms = 0, build_seconds = 0;
+  int min_body_height_ok = 1;
+};
+
+Measure run(const demo::Scene& scene, const std::string& engine, bool boxtree, const std::string& method, int steps) {
+  demo::SimOptions options;
+  options.boxtree_midphase = boxtree;
+  options.method = method;
+  const auto build_start = Clock::now();
+  std::unique_ptr<demo::Simulation> sim =
+      engine == "bullet" ? demo::make_bullet_simulation(scene, options) : demo::make_ode_simulation(scene, options);
+  Measure m;
+  m.build_seconds = std::chrono::duration<double>(Clock::now() - build_start).count();
+  const int first_measured = steps / 3;
+  double collision_before = 0, contacts = 0, step_seconds = 0;
+  std::uint64_t triangles_before = 0;
+  for (int i = 0; i < steps; ++i) {
+    if (i == first_measured) {
+      collision_before = sim->collision_seconds();
+      triangles_before = sim->narrowphase_triangles();
+    }
+    const auto start = Clock::now();
+    sim->step(kTimeStep);
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (i >= first_measured) {
+      step_seconds += seconds;
+      contacts += sim->contacts();
+    }
+  }
+  const double measured = steps - first_measured;
+  m.contacts = contacts / measured;
+  m.triangles = double(sim->narrowphase_triangles() - triangles_before) / measured;
+  m.collision_ms = 1e3 * (sim->collision_seconds() - collision_before) / measured;
+  m.step_ms = 1e3 * step_seconds / measured;
+  return m;
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Drop scene in Bullet and ODE: built-in mesh midphase vs boxtree, in one run"};
+  bool quick = false;
+  std::string json_path, markdown_path;
+  std::string methods_text = "aabb,obb-min,obb-min-tight,pie-min-general-tight";
+  std::string engines_text = "bullet,ode";
+  int steps = 300;
+  std::uint64_t seed = 1;
+  app.add_flag("--quick", quick, "One small scene, aabb and obb-min only, 90 steps (CI)");
+  app.add_option("--json", json_path, "Write the rows (bench/results.json schema) here");
+  app.add_option("--markdown", markdown_path, "Write the tables as a markdown fragment here");
+  app.add_option("--methods", methods_text, "Comma-separated boxtree methods (small terrains; aabb only on large ones)")
+      ->capture_default_str();
+  app.add_option("--engines", engines_text, "bullet, ode or both")->capture_default_str();
+  app.add_option("--steps", steps, "Steps per run (the last two thirds are measured)")->capture_default_str();
+  app.add_option("--seed", seed, "Scene seed")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  auto split = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');)
+      if (!item.empty()) out.push_back(item);
+    return out;
+  };
+  std::vector<std::string> methods = split(methods_text);
+  const std::vector<std::string> engines = split(engines_text);
+  std::vector<Config> configs = {{128, 100, true}, {256, 500, true}, {512, 1000, false}, {1024, 2000, false}};
+  if (quick) {
+    configs = {{64, 60, true}};
+    methods = {"aabb", "obb-min"};
+    steps = std::min(steps, 90);
+  }
+  try {
+    for (const std::string& m : methods) boxtree::parse_method(m);
+    for (const std::string& e : engines)
+      if (e != "bullet" && e != "ode") throw boxtree::Error("unknown engine '" + e + "' (bullet, ode)");
+  } catch (const boxtree::Error& e) {
+    std::fprintf(stderr, "drop_bench: %s\n", e.what());
+    return 2;
+  }
+
+  nlohmann::json rows = nlohmann::json::array();
+  std::ostringstream md;
+  md << "Scene: the demo's (`demos/src/scene.h`): a fractal terrain in a bowl, 40 m across, mixed bodies (spheres, "
+        "boxes, capsules, cylinders, convex hulls, small meshes) dropped in layers; "
+     << steps << " steps of 1/60 s, means over the last two thirds. CPU: " << cpu_model() << ".\n\n";
+  md << "| engine | terrain | bodies | midphase | contacts/step | narrowphase tri/step | collision ms/step | step ms | "
+        "build s | collision ratio | step ratio | contacts ratio | triangles ratio |\n";
+  md << "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  char buf[512];
+  for (const std::string& engine : engines) {
+    const std::string peer = engine == "bullet" ? "bullet btBvhTriangleMeshShape" : "ode dTriMesh (OPCODE)";
+    for (const Config& config : configs) {
+      demo::TerrainOptions terrain;
+      terrain.cells = config.cells;
+      const demo::Scene scene = demo::make_scene(terrain, config.bodies, seed);
+      const std::string case_name = engine + " terrain " + std::to_string(config.cells) + "^2 (" +
+                                    std::to_string(scene.terrain->facet_count()) + " facets), " +
+                                    std::to_string(config.bodies) + " bodies";
+      const Measure builtin = run(scene, engine, false, "", steps);
+      std::snprintf(buf, sizeof buf, "| %s | %d^2 | %d | %s | %.1f | %.0f | %.3f | %.3f | %.2f | | | | |\n", engine.c_str(),
+                    config.cells, config.bodies, peer.c_str(), builtin.contacts, builtin.triangles, builtin.collision_ms,
+                    builtin.step_ms, builtin.build_seconds);
+      md << buf;
+      std::printf("%s: %s contacts %.1f triangles %.0f collision %.3f ms step %.3f ms build %.2f s\n", case_name.c_str(),
+                  peer.c_str(), builtin.contacts, builtin.triangles, builtin.collision_ms, builtin.step_ms,
+                  builtin.build_seconds);
+      std::fflush(stdout);
+      const std::vector<std::string> run_methods = config.all_methods ? methods : std::vector<std::string>{"aabb"};
+      for (const std::string& method : run_methods) {
+        const Measure ours = run(scene, engine, true, method, steps);
+        auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+        const struct {
+          const char* metric;
+          double ours, theirs;
+        } metrics[] = {{"contacts_per_step", ours.contacts, builtin.contacts},
+                       {"narrowphase_triangles_per_step", ours.triangles, builtin.triangles},
+                       {"collision_ms_per_step", ours.collision_ms, builtin.collision_ms},
+                       {"step_ms", ours.step_ms, builtin.step_ms},
+                       {"build_seconds", ours.build_seconds, builtin.build_seconds}};
+        for (const auto& m : metrics)
+          rows.push_back({{"section", "simulation"},
+                          {"case", case_name},
+                          {"metric", m.metric},
+                          {"boxtree_method", method},
+                          {"boxtree", m.ours},
+                          {"peer", peer},
+                          {"peer_value", m.theirs},
+                          {"ratio", ratio(m.ours, m.theirs)}});
+        std::snprintf(buf, sizeof buf,
+                      "| %s | %d^2 | %d | boxtree %s | %.1f | %.0f | %.3f | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
+                      engine.c_str(), config.cells, config.bodies, method.c_str(), ours.contacts, ours.triangles,
+                      ours.collision_ms, ours.step_ms, ours.build_seconds, ratio(ours.collision_ms, builtin.collision_ms),
+                      ratio(ours.step_ms, builtin.step_ms), ratio(ours.contacts, builtin.contacts),
+                      ratio(ours.triangles, builtin.triangles));
+        md << buf;
+        std::printf("%s: boxtree %s contacts %.1f triangles %.0f collision %.3f ms (%.2fx) step %.3f ms (%.2fx) build %.2f s\n",
+                    case_name.c_str(), method.c_str(), ours.contacts, ours.triangles, ours.collision_ms,
+                    ratio(ours.collision_ms, builtin.collision_ms), ours.step_ms, ratio(ours.step_ms, builtin.step_ms),
+                    ours.build_seconds);
+        std::fflush(stdout);
+      }
+    }
+  }
+  if (!json_path.empty()) std::ofstream(json_path) << rows.dump(1) << '\n';
+  if (!markdown_path.empty()) std::ofstream(markdown_path) << md.str();
+  return 0;
+}
