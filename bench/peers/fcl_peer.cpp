@@ -68,7 +68,81 @@ FclResult run(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform
   return r;
 }
 
+template <class BV, class Node>
+FclResult run_poses(const TriangleMesh& a, const TriangleMesh& b, const std::vector<RigidTransform>& poses, int repeats,
+                    std::vector<std::vector<std::pair<FacetId, FacetId>>>* pairs_per_pose) {
+  FclResult r;
+  const auto build_start = Clock::now();
+  auto model_a = make_model<BV>(a);
+  auto model_b = make_model<BV>(b);
+  r.build_seconds = std::chrono::duration<double>(Clock::now() - build_start).count() / 2;
+  const fcl::CollisionRequestd request(std::numeric_limits<int>::max(), false);
+  if (pairs_per_pose) pairs_per_pose->assign(poses.size(), {});
+  r.seconds = 0;
+  for (std::size_t p = 0; p < poses.size(); ++p) {
+    std::vector<double> times;
+    for (int i = 0; i < std::max(1, repeats); ++i) {
+      fcl::Transform3d tf_a = fcl::Transform3d::Identity();
+      fcl::Transform3d tf_b = fcl::Transform3d::Identity();
+      tf_b.linear() = poses[p].rotation;
+      tf_b.translation() = poses[p].translation;
+      fcl::CollisionResultd result;
+      Node node;
+      bool ready = false;
+      auto start = Clock::now();
+      if constexpr (std::is_same_v<Node, fcl::detail::MeshCollisionTraversalNode<BV>>) {
+        // initialize() rewrites a non-identity model in place: give it a copy (not timed).
+        std::shared_ptr<fcl::BVHModel<BV>> b_copy = model_b;
+        if (!tf_b.matrix().isIdentity()) b_copy = std::make_shared<fcl::BVHModel<BV>>(*model_b);
+        start = Clock::now();
+        ready = fcl::detail::initialize(node, *model_a, tf_a, *b_copy, tf_b, request, result);
+        if (!ready) throw Error("fcl: traversal initialisation failed");
+        node.enable_statistics = true;
+        fcl::detail::collide(&node);
+      } else {
+        ready = fcl::detail::initialize(node, std::as_const(*model_a), std::as_const(tf_a), std::as_const(*model_b),
+                                        std::as_const(tf_b), request, result);
+        if (!ready) throw Error("fcl: traversal initialisation failed");
+        node.enable_statistics = true;
+        fcl::detail::collide(&node);
+      }
+      times.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+      if (i > 0) continue;
+      r.bv_tests += std::uint64_t(node.num_bv_tests);
+      r.leaf_tests += std::uint64_t(node.num_leaf_tests);
+      r.pairs += result.numContacts();
+      if (pairs_per_pose) {
+        auto& pairs = (*pairs_per_pose)[p];
+        for (std::size_t k = 0; k < result.numContacts(); ++k) {
+          const fcl::Contactd& c = result.getContact(k);
+          pairs.emplace_back(FacetId(c.b1), FacetId(c.b2));
+        }
+        std::sort(pairs.begin(), pairs.end());
+      }
+    }
+    r.seconds += *std::min_element(times.begin(), times.end());
+  }
+  return r;
+}
+
 }  // namespace
+
+FclResult fcl_collide_poses(const TriangleMesh& a, const TriangleMesh& b, const std::vector<RigidTransform>& a_from_b,
+                            const std::string& bv, int repeats,
+                            std::vector<std::vector<std::pair<FacetId, FacetId>>>* pairs_per_pose) {
+  using namespace fcl::detail;
+  if (bv == "AABB")
+    return run_poses<fcl::AABBd, MeshCollisionTraversalNode<fcl::AABBd>>(a, b, a_from_b, repeats, pairs_per_pose);
+  if (bv == "OBB")
+    return run_poses<fcl::OBBd, MeshCollisionTraversalNodeOBB<double>>(a, b, a_from_b, repeats, pairs_per_pose);
+  if (bv == "RSS")
+    return run_poses<fcl::RSSd, MeshCollisionTraversalNodeRSS<double>>(a, b, a_from_b, repeats, pairs_per_pose);
+  if (bv == "OBBRSS")
+    return run_poses<fcl::OBBRSSd, MeshCollisionTraversalNodeOBBRSS<double>>(a, b, a_from_b, repeats, pairs_per_pose);
+  if (bv == "kIOS")
+    return run_poses<fcl::kIOSd, MeshCollisionTraversalNodekIOS<double>>(a, b, a_from_b, repeats, pairs_per_pose);
+  throw Error("fcl: unknown bounding volume '" + bv + "'");
+}
 
 std::vector<std::string> fcl_bv_names() { return {"AABB", "OBB", "RSS", "OBBRSS", "kIOS"}; }
 
