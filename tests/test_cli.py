@@ -156,5 +156,58 @@ expect_error("unknown subcommand", ["explode"], ["explode"])
 code, out, err = run("--help")
 check("--help exits 0", code == 0 and "info" in out and "collide" in out and "ray" in out, out + err)
 
+# bad input (issue 9): every case exits non-zero with one line on stderr naming the file and the problem
+def write_bytes(name, data):
+    path = os.path.join(scratch, name)
+    with open(path, "wb") as f:
+        f.write(data)
+    return path
+
+
+import random
+import struct
+noise = random.Random(9)
+garbage = bytes(noise.randrange(256) for _ in range(2000))
+tri_stl = b"truncated".ljust(80, b" ") + struct.pack("<I", 4) + struct.pack("<12fH", *([0.0] * 12), 0) * 2
+bad_inputs = [
+    ("empty.obj", b"", ["empty.obj", "empty file"]),
+    ("garbage.obj", garbage, ["garbage.obj", "binary data"]),
+    ("garbage.stl", garbage, ["garbage.stl", "STL"]),
+    ("garbage.ply", garbage, ["garbage.ply", "PLY"]),
+    ("garbage.off", garbage, ["garbage.off", "OFF"]),
+    ("truncated.stl", tri_stl, ["truncated.stl", "truncated binary STL"]),
+    ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", ["nan.obj", "non-finite"]),
+    ("inf.obj", b"v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n", ["inf.obj", "non-finite"]),
+    ("beyond_1e50.obj", b"v 0 0 0\nv 1e60 0 0\nv 0 1 0\nf 1 2 3\n", ["beyond +-1e50"]),
+    ("no_faces.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n", ["no_faces.obj", "no facets"]),
+    ("index_zero.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", ["index_zero.obj", "index 0"]),
+    ("index_negative.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", ["index_negative.obj", "-4"]),
+    ("mesh.xyz", b"v 0 0 0\n", ["mesh.xyz", "unknown mesh file extension"]),
+]
+for name, data, words in bad_inputs:
+    path = write_bytes(name, data)
+    expect_error(f"info {name}", ["info", path], words)
+    expect_error(f"collide with {name}", ["collide", square, path], words)
+    expect_error(f"ray on {name}", ["ray", path, "--rays", rays], words)
+os.makedirs(os.path.join(scratch, "a_directory.obj"), exist_ok=True)
+expect_error("mesh is a directory", ["info", os.path.join(scratch, "a_directory.obj")], ["directory"])
+expect_error("ray with NaN", ["ray", square, "--rays", write("nan_rays.txt", "0 0 1 nan 0 -1\n")], ["nan_rays.txt:1", "not finite"])
+expect_error("generate --size 0", ["generate", "terrain", "--size", "0", "--out", os.path.join(scratch, "x.obj")], ["--size"])
+
+# odd but valid meshes: they load, build and answer
+huge = write("huge_1e30.obj", "v 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nv -1e30 -1e30 -1e30\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n")
+code, out, err = run("info", huge, "--json")
+check("info on 1e30 coordinates", code == 0 and json.loads(out)["facets"] == 4, out + err)
+degenerate = write("degenerate_only.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\nf 1 1 1\n")
+code, out, err = run("info", degenerate, "--json")
+check("info on degenerate facets only", code == 0 and json.loads(out)["nodes"] == 3, out + err)
+# A tetrahedron 1e6 from the origin against itself: every facet touches every other (they share
+# vertices), so all 16 pairs intersect, for every method.
+far = write("far_1e6.obj", "v 1000000 1000000 1000000\nv 1000000.001 1000000 1000000\nv 1000000 1000000.001 1000000\n"
+            "v 1000000 1000000 1000000.001\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n")
+for m in ["aabb", "obb-min", "pie-max", "pie-min+aabb@1"]:
+    code, out, err = run("collide", far, far, "--method", m, "--json")
+    check(f"collide 1e6 offset, touching facets ({m})", code == 0 and json.loads(out)["pairs"] == 16, out + err)
+
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed else 0)

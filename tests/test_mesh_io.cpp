@@ -18,6 +18,7 @@
 #include "boxtree/error.h"
 #include "boxtree/io.h"
 #include "boxtree/mesh.h"
+#include "support/files.h"
 
 namespace fs = std::filesystem;
 using boxtree::TriangleMesh;
@@ -26,33 +27,15 @@ using boxtree::Vec3;
 namespace {
 
 using Corners = std::array<Vec3, 3>;
+using boxtree::test::binary_stl;
+using boxtree::test::expect_load_error;
+using boxtree::test::put_f32;
+using boxtree::test::put_u32;
 
-fs::path scratch_dir() {
-  const fs::path dir = fs::path(BOXTREE_TEST_TMP) / "mesh_io";
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch_dir() { return boxtree::test::scratch_dir("mesh_io"); }
 
 std::string write_file(const std::string& name, const std::string& bytes) {
-  const fs::path path = scratch_dir() / name;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  EXPECT_TRUE(out.good()) << "could not write " << path;
-  return path.string();
-}
-
-// Little-endian encoders for the binary formats (independent of the host's byte order).
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out += static_cast<char>((v >> (8 * i)) & 0xff);
-}
-void put_u16(std::string& out, std::uint16_t v) {
-  out += static_cast<char>(v & 0xff);
-  out += static_cast<char>(v >> 8);
-}
-void put_f32(std::string& out, float f) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, 4);
-  put_u32(out, bits);
+  return boxtree::test::write_bytes(scratch_dir() / name, bytes);
 }
 
 std::vector<Corners> facet_corners(const TriangleMesh& mesh) {
@@ -71,22 +54,6 @@ void expect_facets(const TriangleMesh& mesh, const std::vector<Corners>& expecte
       EXPECT_EQ(actual[f][k], expected[f][k])
           << "facet " << f << " corner " << k << ": got (" << actual[f][k].transpose() << "), expected ("
           << expected[f][k].transpose() << ")";
-    }
-  }
-}
-
-// load_mesh must throw boxtree::Error whose one-line message starts with the path and contains
-// every piece of `expected`.
-void expect_load_error(const std::string& path, const std::vector<std::string>& expected) {
-  try {
-    boxtree::load_mesh(path);
-    ADD_FAILURE() << "load_mesh(" << path << ") did not throw";
-  } catch (const boxtree::Error& e) {
-    const std::string message = e.what();
-    EXPECT_EQ(message.rfind(path, 0), 0u) << "message does not start with the path: " << message;
-    EXPECT_EQ(message.find('\n'), std::string::npos) << "message is not one line: " << message;
-    for (const std::string& piece : expected) {
-      EXPECT_NE(message.find(piece), std::string::npos) << "'" << piece << "' missing from: " << message;
     }
   }
 }
@@ -166,20 +133,6 @@ TEST(MeshIoStl, AsciiKeepsFacetOrder) {
                                       "endsolid test\n");
   const TriangleMesh mesh = boxtree::load_mesh(path);
   expect_facets(mesh, {{v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)}, {v3(0.5, 0.25, -2), v3(150, 0, 0), v3(-3, 1, 2.25)}});
-}
-
-std::string binary_stl(const std::vector<Corners>& facets, const std::string& header_text) {
-  std::string bytes = header_text;
-  bytes.resize(80, ' ');
-  put_u32(bytes, static_cast<std::uint32_t>(facets.size()));
-  for (const Corners& c : facets) {
-    for (int i = 0; i < 3; ++i) put_f32(bytes, 0.0f);  // normal (ignored)
-    for (const Vec3& p : c) {
-      for (int i = 0; i < 3; ++i) put_f32(bytes, static_cast<float>(p[i]));
-    }
-    put_u16(bytes, 0);
-  }
-  return bytes;
 }
 
 TEST(MeshIoStl, BinaryKeepsFacetOrder) {

@@ -105,6 +105,12 @@ bool triangles_intersect_2d(const Vec2 (&p)[3], const Vec2 (&q)[3]) {
 // scalar triple products), restricted to the segment by the signs of its ends w.r.t. the plane.
 bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c,
                             const Vec3& n) {
+  // A meeting point lies in both bounding boxes, so disjoint boxes (compared exactly) mean no
+  // meeting. This also decides the cases the orientation tests below cannot: a triangle so much
+  // smaller than the segment's coordinates (a ratio beyond ~1e15) that its corners vanish in
+  // the rounding of s - a, where all three orientations come out zero ("on every edge").
+  const Vec3 tri_lo = a.cwiseMin(b).cwiseMin(c), tri_hi = a.cwiseMax(b).cwiseMax(c);
+  if ((s.cwiseMax(e).array() < tri_lo.array()).any() || (s.cwiseMin(e).array() > tri_hi.array()).any()) return false;
   const Real os = n.dot(s - a);
   const Real oe = n.dot(e - a);
   if (strictly_same_sign(os, oe)) return false;
@@ -347,6 +353,13 @@ bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const 
 
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
                          const Vec3& b0, const Vec3& b1, const Vec3& b2) {
+  // Disjoint bounding boxes (compared exactly) mean disjoint triangles. Besides being cheap, this
+  // decides cases the orientation tests below cannot resolve: corners of magnitudes 1e15 and
+  // more apart, where the small ones vanish in the rounding (e.g. a segment 1e32 long against
+  // one 1e-9 off its line).
+  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
+  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
+  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
   const Vec3 na = (a1 - a0).cross(a2 - a0);
   const Vec3 nb = (b1 - b0).cross(b2 - b0);
   const bool a_flat = is_zero(na);
@@ -438,6 +451,9 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
   // everything to 0 with radius 0 and so never separates: no special case is needed, and for a
   // degenerate triangle the remaining axes (box faces, edge x box axes) are exactly the
   // separating axes of a segment against a box (Ericson 5.3.3).
+  // NaN anywhere (a NaN query box, or an oriented box with a NaN centre or axis, which reaches
+  // here as NaN corners) would fail every separating comparison, i.e. "overlap".
+  if (a.hasNaN() || b.hasNaN() || c.hasNaN() || box.min.hasNaN() || box.max.hasNaN()) return false;
   // Box face normals first, on the untranslated coordinates (no rounding at all).
   for (int k = 0; k < 3; ++k) {
     if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;
@@ -484,6 +500,8 @@ bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const
 }
 
 bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
+  // A NaN end would make every orientation test of segment_meets_triangle false, i.e. "meets".
+  if (!capsule.p0.allFinite() || !capsule.p1.allFinite()) return false;
   return segment_triangle_distance_squared(capsule.p0, capsule.p1, a, b, c) <= capsule.radius * capsule.radius;
 }
 
@@ -620,16 +638,31 @@ Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec
 // ---------------------------------------------------------------------------------------------
 // Out-of-line box tests of volume/aabb.h
 
+// Centres, half extents and the motion are rounded at the scale of the coordinates, not of the
+// boxes: far from the origin (1e6 and beyond) two touching boxes could come out apart by an ulp
+// of their position, which boxes_overlap's slack (relative to the sizes and the centre distance)
+// does not cover. Padding both boxes by a few hundred ulps of the largest coordinate involved
+// keeps these tests conservative (touching boxes always overlap).
+namespace {
+Real coordinate_pad(const Aabb& a, const Vec3& b_extreme, const Vec3& translation) {
+  return kContactSlack * (a.min.cwiseAbs().maxCoeff() + a.max.cwiseAbs().maxCoeff() + b_extreme.cwiseAbs().maxCoeff() +
+                          translation.cwiseAbs().maxCoeff());
+}
+}  // namespace
+
 bool overlaps(const Aabb& box, const Obb& obb) {
   if (box.is_empty()) return false;
-  return detail::boxes_overlap((box.max - box.min) * Real(0.5), obb.center - box.center(), obb.axes, obb.half_extents);
+  const Vec3 pad = Vec3::Constant(coordinate_pad(box, obb.center, Vec3::Zero()));
+  return detail::boxes_overlap((box.max - box.min) * Real(0.5) + pad, obb.center - box.center(), obb.axes,
+                               obb.half_extents + pad);
 }
 
 bool overlaps(const Aabb& a, const Aabb& b, const RigidTransform& a_from_b) {
   if (a.is_empty() || b.is_empty()) return false;
   const Vec3 b_center = a_from_b.apply(b.center());
-  return detail::boxes_overlap((a.max - a.min) * Real(0.5), b_center - a.center(), a_from_b.rotation,
-                       (b.max - b.min) * Real(0.5));
+  const Vec3 pad = Vec3::Constant(coordinate_pad(a, b.min.cwiseAbs().cwiseMax(b.max.cwiseAbs()), a_from_b.translation));
+  return detail::boxes_overlap((a.max - a.min) * Real(0.5) + pad, b_center - a.center(), a_from_b.rotation,
+                               (b.max - b.min) * Real(0.5) + pad);
 }
 
 bool overlaps(const Aabb& box, const Capsule& capsule) {

@@ -712,6 +712,31 @@ void check_off_structure(const std::string& path, const std::string& data) {
     fail(path, "truncated OFF file: the header declares " + std::to_string(counts[0]) + " vertices and " +
                    std::to_string(counts[1]) + " faces but the file has " + std::to_string(lines) + " lines");
   }
+  // Face lines: Assimp 5.2 reads as many indices as a face's first number says, past the end of
+  // the line and of the buffer if the line is short (a crash found by tests/fuzz), and drops faces
+  // of fewer than 3 or more than 9 corners. Each face line must therefore hold 3 to 9 indices, all
+  // present. The data lines are the non-blank, non-comment lines after the counts.
+  const std::string_view face_count_token = tokens[next + 1];
+  std::size_t at = static_cast<std::size_t>(face_count_token.data() + face_count_token.size() - data.data());
+  at = data.find_first_of("\r\n", at);
+  std::uint64_t data_line = 0;
+  while (at != std::string::npos && at < data.size() && data_line < counts[0] + counts[1]) {
+    at = data.find_first_not_of("\r\n", at);
+    if (at == std::string::npos) break;
+    std::size_t end = data.find_first_of("\r\n", at);
+    if (end == std::string::npos) end = data.size();
+    const std::string_view text(data.data() + at, end - at);
+    at = end;
+    const std::vector<std::string_view> fields = split_fields(text);
+    if (fields.empty() || fields[0][0] == '#') continue;
+    if (data_line++ < counts[0]) continue;  // a vertex
+    std::uint64_t corners = 0;
+    const auto result = std::from_chars(fields[0].data(), fields[0].data() + fields[0].size(), corners);
+    if (result.ec != std::errc() || corners < 3 || corners > 9 || fields.size() < corners + 1) {
+      fail(path, "malformed OFF file: face " + std::to_string(data_line - counts[0] - 1) + " " + shown(text) +
+                     ": needs 3 to 9 corners, all given");
+    }
+  }
 }
 
 TriangleMesh load_with_assimp(const std::string& path, const std::string& data, const std::string& ext) {
@@ -796,7 +821,7 @@ TriangleMesh load_mesh(const std::string& path) {
   }
   const std::string data = read_whole_file(path);
   TriangleMesh mesh = ext == ".obj" ? load_obj(path, data) : load_with_assimp(path, data, ext);
-  validate_mesh(mesh, path);
+  validate_mesh(mesh, path, /*for_tree=*/false);  // any finite coordinate loads; build_tree limits them
   return mesh;
 }
 

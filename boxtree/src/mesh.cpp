@@ -20,6 +20,11 @@ constexpr std::size_t kMaxFacets = static_cast<std::size_t>(std::numeric_limits<
 
 bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
 
+// The exact triangle tests form products of up to six coordinates (squared norms of cross
+// products, triple products of differences); beyond 1e50 these overflow to infinity and the
+// answers become meaningless, so such meshes are refused rather than answered wrongly.
+constexpr Real kMaxCoordinate = 1e50;
+
 Vec3 facet_cross(const TriangleMesh& mesh, FacetId facet) {
   const Vec3& a = mesh.corner(facet, 0);
   return (mesh.corner(facet, 1) - a).cross(mesh.corner(facet, 2) - a);
@@ -27,7 +32,7 @@ Vec3 facet_cross(const TriangleMesh& mesh, FacetId facet) {
 
 }  // namespace
 
-void validate_mesh(const TriangleMesh& mesh, const std::string& source) {
+void validate_mesh(const TriangleMesh& mesh, const std::string& source, bool for_tree) {
   const std::size_t facet_count = mesh.triangles.size();
   const std::size_t vertex_count = mesh.vertices.size();
   if (facet_count == 0) {
@@ -48,6 +53,12 @@ void validate_mesh(const TriangleMesh& mesh, const std::string& source) {
         std::ostringstream message;
         message << source << ": facet " << f << " uses vertex " << v << " with a non-finite coordinate (" << p.x()
                 << ", " << p.y() << ", " << p.z() << ")";
+        throw Error(message.str());
+      }
+      if (for_tree && p.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        std::ostringstream message;
+        message << source << ": facet " << f << " uses vertex " << v << " with a coordinate beyond +-1e50 (" << p.x()
+                << ", " << p.y() << ", " << p.z() << "): too large for the triangle tests";
         throw Error(message.str());
       }
     }

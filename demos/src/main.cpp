@@ -12,8 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "boxtree/error.h"
 #include "boxtree/method.h"
@@ -31,6 +33,15 @@ namespace fs = std::filesystem;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+// Resident set size in kB (VmRSS of /proc/self/status), 0 where unavailable.
+long resident_kb() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::atol(line.c_str() + 6);
+  }
+  return 0;
+}
+
 struct Options {
   std::string engine = "bullet";
   std::string midphase;  // empty: boxtree if the engine's adapter was built, else builtin
@@ -46,6 +57,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::string json_path;
   int overlay_level = -1;
+  bool soak = false;
 };
 
 constexpr Real kTimeStep = 1.0 / 60;
@@ -87,6 +99,91 @@ int run_overlay(const Options& o, const TerrainOptions& terrain_options) {
                            {"volumes", result.volumes},
                            {"image", file}});
   return 0;
+}
+
+// --soak: a long run without rendering that watches for the failures a long simulation can
+// show: non-finite poses, bodies sinking below the terrain, memory growth. Every --every steps it
+// samples the number of non-finite poses, the lowest body centre relative to the terrain under
+// it, and the resident set size; it prints one line per sample and the summary (also to --json).
+// Exit code 1 if any pose went non-finite or any body on the terrain ended below it.
+int run_soak(const Options& o, const TerrainOptions& terrain_options) {
+  const bool bullet = o.engine == "bullet";
+  const bool adapter = bullet ? have_bullet_adapter() : have_ode_adapter();
+  const std::string midphase = o.midphase.empty() ? (adapter ? "boxtree" : "builtin") : o.midphase;
+  if (midphase == "boxtree") boxtree::parse_method(o.method);
+  const auto start = Clock::now();
+  const Scene scene = make_scene(terrain_options, o.bodies, o.seed);
+  SimOptions sim_options;
+  sim_options.boxtree_midphase = midphase == "boxtree";
+  sim_options.method = o.method;
+  sim_options.seed = o.seed;
+  auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
+  constexpr Real kAllowance = 0.05;  // as in the simulation summary
+  const TerrainProbe& probe = *scene.probe;
+  json samples = json::array();
+  int worst_nan = 0, worst_below = 0;
+  std::vector<bool> reported(scene.bodies.size(), false);  // bodies already named as below the terrain
+  Real lowest = std::numeric_limits<Real>::infinity();
+  const long rss_start = resident_kb();
+  std::printf("boxtree-demo soak: %s, %s midphase, %zu bodies, %d steps; RSS at start %ld kB\n", o.engine.c_str(),
+              midphase.c_str(), scene.bodies.size(), o.steps, rss_start);
+  for (int step = 1; step <= o.steps; ++step) {
+    sim->step(kTimeStep);
+    if (step % o.every != 0 && step != o.steps) continue;
+    int nan = 0, below = 0;
+    Real min_clearance = std::numeric_limits<Real>::infinity();
+    const std::vector<Pose> poses = sim->poses();
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      const Vec3& p = poses[i].position;
+      if (!p.allFinite() || !poses[i].orientation.coeffs().allFinite()) {
+        ++nan;
+        continue;
+      }
+      Real ground = 0;
+      if (!probe.height_at(p.x(), p.y(), &ground)) continue;
+      min_clearance = std::min(min_clearance, p.z() - ground);
+      if (p.z() < ground - kAllowance) {
+        ++below;
+        if (!reported[i]) {
+          reported[i] = true;
+          std::printf("  body %zu (%s) below the terrain at step %d: (%.3f, %.3f, %.3f), terrain at %.3f\n", i,
+                      shape_name(scene.bodies[i].shape), step, p.x(), p.y(), p.z(), ground);
+        }
+      }
+    }
+    const long rss = resident_kb();
+    worst_nan = std::max(worst_nan, nan);
+    worst_below = std::max(worst_below, below);
+    lowest = std::min(lowest, min_clearance);
+    std::printf("  step %d: %.0f s, %d non-finite, %d below the terrain, lowest centre %.4f m above it, %d contacts, RSS %ld kB\n",
+                step, seconds_since(start), nan, below, min_clearance, sim->contacts(), rss);
+    std::fflush(stdout);
+    samples.push_back({{"step", step}, {"wall_seconds", seconds_since(start)}, {"non_finite", nan}, {"below", below},
+                       {"min_clearance", min_clearance}, {"contacts", sim->contacts()}, {"rss_kb", rss}});
+  }
+  const double wall = seconds_since(start);
+  const long rss_middle = samples.empty() ? 0 : samples[samples.size() / 2]["rss_kb"].get<long>();
+  const long rss_end = resident_kb();
+  std::printf("boxtree-demo soak: %d steps in %.0f s; non-finite poses at most %d, bodies below the terrain at most %d, "
+              "lowest centre %.4f m above the terrain; RSS start %ld kB, middle %ld kB, end %ld kB\n",
+              o.steps, wall, worst_nan, worst_below, lowest, rss_start, rss_middle, rss_end);
+  write_json(o.json_path, {{"mode", "soak"},
+                           {"engine", o.engine},
+                           {"midphase", midphase},
+                           {"method", o.method},
+                           {"seed", o.seed},
+                           {"bodies", scene.bodies.size()},
+                           {"steps", o.steps},
+                           {"wall_seconds", wall},
+                           {"collision_seconds", sim->collision_seconds()},
+                           {"max_non_finite", worst_nan},
+                           {"max_below_terrain", worst_below},
+                           {"min_clearance", lowest},
+                           {"rss_kb_start", rss_start},
+                           {"rss_kb_middle", rss_middle},
+                           {"rss_kb_end", rss_end},
+                           {"samples", samples}});
+  return worst_nan == 0 && worst_below == 0 ? 0 : 1;
 }
 
 int run_simulation(const Options& o, const TerrainOptions& terrain_options) {
@@ -265,6 +362,9 @@ int main(int argc, char** argv) {
                  "Overlay mode: no simulation; draw the tree's volumes at this level (0 = leaves) over the terrain "
                  "or --mesh, into OUT/overlay-METHOD-levelL.png")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--soak", o.soak,
+               "Soak mode: no rendering; every --every steps report non-finite poses, the lowest body relative to "
+               "the terrain and the resident memory (exit 1 on a non-finite pose or a body below the terrain)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -277,6 +377,7 @@ int main(int argc, char** argv) {
     terrain.cells = o.terrain_size;
     terrain.mesh_path = o.mesh;
     terrain.up_axis = o.up[0];
+    if (o.soak) return run_soak(o, terrain);
     return o.overlay_level >= 0 ? run_overlay(o, terrain) : run_simulation(o, terrain);
   } catch (const std::exception& e) {
     std::cerr << "boxtree-demo: error: " << e.what() << "\n";

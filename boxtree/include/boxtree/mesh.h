@@ -40,8 +40,10 @@ struct MeshStats {
 
 // Throws boxtree::Error, naming `source` (a file name or "mesh") and the offending facet or
 // vertex, when: there are no facets, an index is out of range, or a used vertex has a NaN/Inf
-// coordinate. Degenerate facets are accepted (counted by compute_mesh_stats).
-void validate_mesh(const TriangleMesh& mesh, const std::string& source = "mesh");
+// coordinate or, with `for_tree` (what build_tree checks), one beyond +-1e50, where the exact
+// triangle tests would overflow (load_mesh reads such files, the builder refuses them).
+// Degenerate facets are accepted (counted by compute_mesh_stats).
+void validate_mesh(const TriangleMesh& mesh, const std::string& source = "mesh", bool for_tree = true);
 
 // Assumes a valid mesh.
 MeshStats compute_mesh_stats(const TriangleMesh& mesh);

@@ -1,0 +1,162 @@
+// Reliability of the Bullet adapter (issue 9): bad meshes given to BoxtreeMeshShape's constructors
+// are refused with one clear line (and the caller's arrays left alone); a terrain full of
+// duplicate, zero-area and sliver facets gives no NaN and lets no body through; the same scene
+// stepped twice gives bit-identical transforms.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "support/odd_meshes.h"
+#include "world.h"
+
+namespace boxtree::bullet::test {
+namespace {
+
+struct BadArrays {
+  const char* name;
+  std::vector<btScalar> vertices;
+  std::vector<int> indices;
+  const char* expected;  // a piece of the message
+};
+
+TEST(BulletReliability, BadMeshesAreRefusedWithOneClearLine) {
+  const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+  const btScalar inf = std::numeric_limits<btScalar>::infinity();
+  const std::vector<btScalar> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::vector<BadArrays> cases = {
+      {"index beyond the vertex count", tri, {0, 1, 3}, "out of range"},
+      {"negative index", tri, {0, -1, 2}, "out of range"},
+      {"NaN coordinate", {0, 0, 0, nan, 0, 0, 0, 1, 0}, {0, 1, 2}, "non-finite"},
+      {"infinite coordinate", {0, 0, 0, 1, 0, 0, 0, -inf, 0}, {0, 1, 2}, "non-finite"},
+      {"coordinate of 1e38", {0, 0, 0, btScalar(1e38), 0, 0, 0, 1, 0}, {0, 1, 2}, ""},  // legal below 1e50
+  };
+  for (const BadArrays& c : cases) {
+    SCOPED_TRACE(c.name);
+    std::vector<btScalar> vertices = c.vertices;
+    std::vector<int> indices = c.indices;
+    btTriangleIndexVertexArray array(int(indices.size() / 3), indices.data(), 3 * int(sizeof(int)),
+                                     int(vertices.size() / 3), vertices.data(), 3 * int(sizeof(btScalar)));
+    if (std::string(c.expected).empty()) {
+      EXPECT_NO_THROW(BoxtreeMeshShape(array, "aabb"));
+      continue;
+    }
+    try {
+      BoxtreeMeshShape shape(array, "obb-min");
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+    EXPECT_EQ(indices, c.indices);  // the caller's arrays are left as they were
+    EXPECT_EQ(std::memcmp(vertices.data(), c.vertices.data(), vertices.size() * sizeof(btScalar)), 0);
+  }
+  // No triangles at all, through each constructor.
+  std::vector<btScalar> vertices = tri;
+  std::vector<int> indices;
+  btTriangleIndexVertexArray empty(0, indices.data(), 3 * int(sizeof(int)), 3, vertices.data(),
+                                   3 * int(sizeof(btScalar)));
+  EXPECT_THROW(BoxtreeMeshShape(empty, "aabb"), Error);
+  EXPECT_THROW(BoxtreeMeshShape(std::make_shared<const TriangleMesh>(), "aabb"), Error);
+  EXPECT_THROW(BoxtreeMeshShape{AnyTree{}}, Error);
+  // 16-bit indices out of range.
+  std::vector<unsigned short> short_indices = {0, 1, 7};
+  btIndexedMesh part;
+  part.m_numTriangles = 1;
+  part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(short_indices.data());
+  part.m_triangleIndexStride = 3 * sizeof(unsigned short);
+  part.m_numVertices = 3;
+  part.m_vertexBase = reinterpret_cast<const unsigned char*>(vertices.data());
+  part.m_vertexStride = 3 * sizeof(btScalar);
+  btTriangleIndexVertexArray shorts;
+  shorts.addIndexedMesh(part, PHY_SHORT);
+  EXPECT_THROW(BoxtreeMeshShape(shorts, "aabb"), Error);
+}
+
+// Spheres, boxes, capsules and hulls dropped on the odd terrain; `steps` of 1/60 s.
+struct OddScene {
+  World world{true};
+  BulletMesh mesh;
+  std::vector<btRigidBody*> bodies;
+  explicit OddScene(const TriangleMesh& terrain) : mesh(terrain) {
+    world.add(std::make_unique<BoxtreeMeshShape>(*mesh.array, "obb-min"), 0, btVector3(0, 0, 0));
+    for (int i = 0; i < 48; ++i) {
+      const btVector3 p(btScalar(4 + 4 * (i % 6)), btScalar(4 + 4 * ((i / 6) % 6)), btScalar(8 + 2 * (i / 36)));
+      std::unique_ptr<btCollisionShape> shape;
+      switch (i % 4) {
+        case 0:
+          shape = std::make_unique<btSphereShape>(btScalar(0.5));
+          break;
+        case 1:
+          shape = std::make_unique<btBoxShape>(btVector3(0.5f, 0.4f, 0.3f));
+          break;
+        case 2:
+          shape = std::make_unique<btCapsuleShapeZ>(btScalar(0.3), btScalar(0.8));
+          break;
+        default: {
+          auto hull = std::make_unique<btConvexHullShape>();
+          for (int k = 0; k < 8; ++k)
+            hull->addPoint(btVector3(k & 1 ? 0.4f : -0.4f, k & 2 ? 0.3f : -0.3f, k & 4 ? 0.5f : -0.5f), false);
+          hull->recalcLocalAabb();
+          shape = std::move(hull);
+        }
+      }
+      btRigidBody* body = world.add(std::move(shape), 1, p, btQuaternion(btVector3(1, 1, 0).normalized(), 0.3f * i));
+      body->setRollingFriction(btScalar(0.05));
+      body->setDamping(btScalar(0.05), btScalar(0.3));
+      bodies.push_back(body);
+    }
+  }
+  void run(int steps) {
+    for (int i = 0; i < steps; ++i) world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+  }
+};
+
+TEST(BulletReliability, OddTerrainGivesNoNanAndNoFallThrough) {
+  const TriangleMesh terrain = boxtree::test::make_odd_terrain(28, 3, 28, 3);
+  const AnyTree reference = AnyTree::build(std::make_shared<TriangleMesh>(BulletMesh(terrain).as_boxtree()), Method{});
+  OddScene scene(terrain);
+  scene.run(300);
+  int non_finite = 0, off = 0;
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const btTransform& t = scene.bodies[i]->getWorldTransform();
+    const Vec3 p = to_vec3(t.getOrigin());
+    if (!p.allFinite() || !std::isfinite(double(t.getRotation().length()))) {
+      ++non_finite;
+      continue;
+    }
+    const auto hit = reference.ray_closest_hit(Ray{Vec3(p.x(), p.y(), 1000), Vec3(0, 0, -1)});
+    if (!hit) {
+      ++off;  // rolled off the terrain's edge (an open sheet), not through it
+      continue;
+    }
+    EXPECT_GT(p.z(), 1000 - hit->t) << "body " << i << " fell through";
+  }
+  EXPECT_EQ(non_finite, 0);
+  EXPECT_LE(off, int(scene.bodies.size()) / 8) << "most bodies stay on the terrain";
+}
+
+TEST(BulletReliability, SameSceneTwiceGivesBitIdenticalTransforms) {
+  const TriangleMesh terrain = boxtree::test::make_odd_terrain(20, 5, 28, 3);
+  OddScene a(terrain), b(terrain);
+  for (int round = 0; round < 4; ++round) {
+    a.run(60);
+    b.run(60);
+    for (std::size_t i = 0; i < a.bodies.size(); ++i) {
+      const btTransform& ta = a.bodies[i]->getWorldTransform();
+      const btTransform& tb = b.bodies[i]->getWorldTransform();
+      // x, y, z only: btVector3's fourth lane is unused and need not match.
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(ta.getOrigin()[k], tb.getOrigin()[k]) << "body " << i << " round " << round;
+        for (int j = 0; j < 3; ++j) ASSERT_EQ(ta.getBasis()[k][j], tb.getBasis()[k][j]) << "body " << i;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace boxtree::bullet::test
