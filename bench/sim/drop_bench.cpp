@@ -90,9 +90,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Drop scene in Bullet and ODE: built-in mesh midphase vs boxtree, in one run"};
   bool quick = false;
   std::string json_path, markdown_path;
-  std::string methods_text = "aabb,obb-min,obb-min-tight,pie-min-general-tight";
+  std::string methods_text = "aabb,obb-min-tight";
   std::string engines_text = "bullet,ode";
-  int steps = 300;
+  int steps = 240;
   std::uint64_t seed = 1;
   app.add_flag("--quick", quick, "One small scene, aabb and obb-min only, 90 steps (CI)");
   app.add_option("--json", json_path, "Write the rows (bench/results.json schema) here");
