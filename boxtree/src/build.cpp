@@ -20,6 +20,7 @@
 #include <type_traits>
 
 #include "boxtree/detail/volume_kinds.h"
+#include "internal.h"
 #include "boxtree/planar/terrain.h"
 
 namespace boxtree {
@@ -402,25 +403,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   const std::size_t node_count = volumes.size();
   BOXTREE_ASSERT(node_count == 2 * n - 1, "a binary tree over n leaves has 2n-1 nodes");
   std::vector<Volume> out_volumes;
-  std::vector<std::uint32_t> out_links(node_count, 0);
-  out_volumes.reserve(node_count);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack;  // (build index, output slot)
-  out_volumes.resize(1, volumes[active[0]]);
-  stack.push_back({active[0], 0});
-  while (!stack.empty()) {
-    const auto [node, slot] = stack.back();
-    stack.pop_back();
-    out_volumes[slot] = volumes[node];
-    if (node < n) {
-      out_links[slot] = Tree<Volume>::kLeafFlag | node;
-      continue;
-    }
-    const std::uint32_t child_slot = std::uint32_t(out_volumes.size());
-    out_volumes.resize(out_volumes.size() + 2, volumes[node]);
-    out_links[slot] = child_slot;
-    stack.push_back({second[node], child_slot + 1});
-    stack.push_back({first[node], child_slot});
-  }
+  std::vector<std::uint32_t> out_links;
+  detail::depth_first_layout(volumes, first, second, active[0], n, Tree<Volume>::kLeafFlag, out_volumes, out_links);
   const int height = heights[active[0]];
   if constexpr (!std::is_same_v<Volume, Aabb> && !is_hybrid_v<Volume>) {
     if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out_volumes, out_links, settings.cost);

@@ -1,5 +1,9 @@
 #pragma once
 // Helpers shared by several source files of the library; not part of the public API.
+#include <cstdint>
+#include <utility>
+#include <vector>
+
 #include "boxtree/mesh.h"
 
 namespace boxtree::detail {
@@ -16,5 +20,31 @@ bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb)
 // Villemin, "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017): branch-free of any
 // threshold. Defined in volume_obb.cpp.
 void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2);
+
+// The builders' final layout (build_tree, planar::build_terrain_tree): nodes in build order
+// (leaves 0..leaf_count-1 are the facets, parents after, children `first`/`second`) laid out
+// depth-first from `root` with the two children of a node in adjacent slots, as Tree expects.
+template <class Volume>
+void depth_first_layout(const std::vector<Volume>& volumes, const std::vector<std::uint32_t>& first,
+                        const std::vector<std::uint32_t>& second, std::uint32_t root, std::size_t leaf_count,
+                        std::uint32_t leaf_flag, std::vector<Volume>& out_volumes, std::vector<std::uint32_t>& out_links) {
+  out_volumes.assign(volumes.size(), Volume{});
+  out_links.assign(volumes.size(), 0);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root, 0}};  // (build index, output slot)
+  std::uint32_t next_slot = 1;
+  while (!stack.empty()) {
+    const auto [node, slot] = stack.back();
+    stack.pop_back();
+    out_volumes[slot] = volumes[node];
+    if (node < leaf_count) {
+      out_links[slot] = leaf_flag | node;
+      continue;
+    }
+    out_links[slot] = next_slot;
+    stack.push_back({second[node], next_slot + 1});
+    stack.push_back({first[node], next_slot});
+    next_slot += 2;
+  }
+}
 
 }  // namespace boxtree::detail

@@ -9,6 +9,7 @@
 #include "boxtree/error.h"
 #include "boxtree/planar/partition.h"
 #include "boxtree/planar/planar_tree.h"
+#include "../internal.h"
 
 namespace boxtree::planar {
 
@@ -92,24 +93,9 @@ Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, Bu
   const std::uint32_t root = merges.empty() ? planar_node[0] : planar_node[cell_count + merges.size() - 1];
   BOXTREE_ASSERT(volumes.size() == 2 * n - 1, "a binary tree over n leaves has 2n-1 nodes");
 
-  // Depth-first layout, siblings adjacent (as build_tree's).
-  std::vector<Volume> out_volumes(volumes.size());
-  std::vector<std::uint32_t> out_links(volumes.size(), 0);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root, 0}};
-  std::uint32_t next_slot = 1;
-  while (!stack.empty()) {
-    const auto [node, slot] = stack.back();
-    stack.pop_back();
-    out_volumes[slot] = volumes[node];
-    if (node < n) {
-      out_links[slot] = Tree<Volume>::kLeafFlag | node;
-      continue;
-    }
-    out_links[slot] = next_slot;
-    stack.push_back({second[node], next_slot + 1});
-    stack.push_back({first[node], next_slot});
-    next_slot += 2;
-  }
+  std::vector<Volume> out_volumes;
+  std::vector<std::uint32_t> out_links;
+  detail::depth_first_layout(volumes, first, second, root, n, Tree<Volume>::kLeafFlag, out_volumes, out_links);
   const int height = heights[root];
   if (stats) {
     stats->rounds = int(planar_stats.rounds.size());
