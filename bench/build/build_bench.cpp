@@ -45,6 +45,9 @@
 namespace {
 
 using boxtree::bench::Clock;
+using boxtree::bench::format;
+using boxtree::bench::table;
+using boxtree::bench::with_commas;
 using boxtree::bench::Row;
 
 constexpr const char* kTimeMetric = "build_seconds (lower is better)";
@@ -57,38 +60,6 @@ struct Measure {
   std::size_t nodes = 0;
   std::string note;
 };
-
-std::string with_commas(std::uint64_t x) {
-  std::string s = std::to_string(x);
-  for (int i = int(s.size()) - 3; i > 0; i -= 3) s.insert(std::size_t(i), ",");
-  return s;
-}
-
-std::string format(const char* fmt, double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, x);
-  return buf;
-}
-
-std::string table(const std::vector<std::vector<std::string>>& cells, bool markdown) {
-  std::vector<std::size_t> width(cells.front().size(), 0);
-  for (const auto& row : cells)
-    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
-  std::ostringstream out;
-  for (std::size_t r = 0; r < cells.size(); ++r) {
-    for (std::size_t c = 0; c < cells[r].size(); ++c) {
-      const std::string& cell = cells[r][c];
-      if (markdown) out << "| " << cell << " ";
-      else out << (c ? "  " : "") << cell << std::string(width[c] - cell.size(), ' ');
-    }
-    out << (markdown ? "|\n" : "\n");
-    if (markdown && r == 0) {
-      for (std::size_t c = 0; c < cells[r].size(); ++c) out << (c ? "|---:" : "|---");
-      out << "|\n";
-    }
-  }
-  return out.str();
-}
 
 // Runs `build` `repeats` times (each returns a Measure with its seconds) and keeps the fastest.
 template <class Build>

@@ -1,6 +1,8 @@
 #include "bench_report.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <sstream>
@@ -88,6 +90,38 @@ std::string machine_markdown(const std::string& peers) {
 std::uint64_t peak_rss_bytes() {
   const std::string hwm = proc_field("/proc/self/status", "VmHWM");  // "123456 kB"
   return hwm.empty() ? 0 : std::uint64_t(std::stoull(hwm)) * 1024;
+}
+
+std::string with_commas(std::uint64_t x) {
+  std::string s = std::to_string(x);
+  for (int i = int(s.size()) - 3; i > 0; i -= 3) s.insert(std::size_t(i), ",");
+  return s;
+}
+
+std::string format(const char* fmt, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, x);
+  return buf;
+}
+
+std::string table(const std::vector<std::vector<std::string>>& cells, bool markdown) {
+  std::vector<std::size_t> width(cells.front().size(), 0);
+  for (const auto& row : cells)
+    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  std::ostringstream out;
+  for (std::size_t r = 0; r < cells.size(); ++r) {
+    for (std::size_t c = 0; c < cells[r].size(); ++c) {
+      const std::string& cell = cells[r][c];
+      if (markdown) out << "| " << cell << " ";
+      else out << (c ? "  " : "") << cell << std::string(width[c] - cell.size(), ' ');
+    }
+    out << (markdown ? "|\n" : "\n");
+    if (markdown && r == 0) {
+      for (std::size_t c = 0; c < cells[r].size(); ++c) out << (c ? "|---:" : "|---");
+      out << "|\n";
+    }
+  }
+  return out.str();
 }
 
 }  // namespace boxtree::bench

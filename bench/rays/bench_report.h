@@ -43,6 +43,13 @@ std::string machine_markdown(const std::string& peers);
 // Writes text to a file (throws on I/O errors).
 void write_text(const std::string& path, const std::string& text);
 
+// 1234567 -> "1,234,567".
+std::string with_commas(std::uint64_t x);
+// One number through a printf format (e.g. "%.3f").
+std::string format(const char* fmt, double x);
+// A plain-text (aligned columns) or markdown table; the first row is the header.
+std::string table(const std::vector<std::vector<std::string>>& cells, bool markdown);
+
 // Peak resident set of this process so far (VmHWM), bytes; 0 if unknown.
 std::uint64_t peak_rss_bytes();
 
