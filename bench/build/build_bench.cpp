@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -266,6 +267,7 @@ int main(int argc, char** argv) {
   md << "Whole build benchmark: " << format("%.1f", total) << " s.\n";
   try {
     if (!plot_dir.empty()) {
+      std::filesystem::create_directories(plot_dir);
       if (csv_path.empty()) csv_path = plot_dir + "/build_memory.csv";
       md << "\n![build time vs facets](build_time.png)\n![bytes per facet vs facets](build_bytes.png)\n";
     }
