@@ -109,6 +109,21 @@ double BulletBvhMesh::ray_closest(const Vec3& origin, const Vec3& direction, dou
   return callback.hit ? double(callback.m_hitFraction) * t_max : std::numeric_limits<double>::infinity();
 }
 
+namespace {
+struct CollectNodes final : btNodeOverlapCallback {
+  std::vector<int>* out = nullptr;
+  void processNode(int, int triangle) override { out->push_back(triangle); }
+};
+}  // namespace
+
+void BulletBvhMesh::box_candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out) {
+  CollectNodes collect;
+  collect.out = &out;
+  const btVector3 min(btScalar(lo.x()), btScalar(lo.y()), btScalar(lo.z()));
+  const btVector3 max(btScalar(hi.x()), btScalar(hi.y()), btScalar(hi.z()));
+  impl_->shape->getOptimizedBvh()->reportAabbOverlappingNodex(&collect, min, max);
+}
+
 #else  // no Bullet
 
 struct BulletBvhMesh::Impl {};
@@ -121,6 +136,7 @@ BulletBvhBytes BulletBvhMesh::bytes() const { return {}; }
 std::size_t BulletBvhMesh::node_count() const { return 0; }
 std::size_t BulletBvhMesh::mesh_copy_bytes() const { return 0; }
 double BulletBvhMesh::ray_closest(const Vec3&, const Vec3&, double) { return 0; }
+void BulletBvhMesh::box_candidates(const Vec3&, const Vec3&, std::vector<int>&) {}
 
 #endif
 

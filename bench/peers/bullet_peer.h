@@ -12,6 +12,7 @@
 // hits are found: every leaf box the segment crosses is tested.
 #include <cstddef>
 #include <memory>
+#include <vector>
 
 #include "boxtree/mesh.h"
 
@@ -46,6 +47,11 @@ class BulletBvhMesh {
   // Closest hit of origin + t * direction for t in [0, t_max] (direction unit length): t, or
   // +infinity on a miss.
   double ray_closest(const Vec3& origin, const Vec3& direction, double t_max);
+
+  // Midphase only: the triangles whose quantized leaf box overlaps the box [lo, hi]
+  // (btQuantizedBvh::reportAabbOverlappingNodex, the walk under processAllTriangles, without
+  // fetching the triangles' vertices). Appends their indices to `out`.
+  void box_candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out);
 
  private:
   struct Impl;

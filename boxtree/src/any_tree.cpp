@@ -10,8 +10,18 @@ AnyTree AnyTree::build(std::shared_ptr<const TriangleMesh> mesh, const Method& m
                        BuildStats* stats) {
   return with_method(method, [&](auto tag) {
     using V = typename decltype(tag)::type;
-    return AnyTree(build_tree<V>(std::move(mesh), settings_for(method, settings), stats), method);
+    auto tree = build_tree<V>(std::move(mesh), settings_for(method, settings), stats);
+    if constexpr (std::is_same_v<V, Aabb>) return AnyTree(PackedAabbTree(tree));
+    else return AnyTree(std::move(tree), method);
   });
+}
+
+AnyTree::AnyTree(PackedAabbTree tree)
+    : impl_(tree.empty() ? nullptr : std::make_shared<const Model<PackedAabbTree>>(std::move(tree))), method_() {}
+
+const PackedAabbTree* AnyTree::packed() const {
+  const auto* model = dynamic_cast<const Model<PackedAabbTree>*>(impl_.get());
+  return model ? &model->tree : nullptr;
 }
 
 namespace {

@@ -42,21 +42,11 @@ struct StatsSink {
   }
 };
 
-bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& s) { return triangle_overlaps_aabb(a, b, c, s); }
-bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& s) { return triangle_overlaps_obb(a, b, c, s); }
-bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& s) { return triangle_overlaps_sphere(a, b, c, s); }
-bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& s) { return triangle_overlaps_capsule(a, b, c, s); }
-
-bool valid_ray(const Ray& ray) {
-  return ray.origin.allFinite() && ray.direction.allFinite() && !std::isnan(ray.t_min) && !std::isnan(ray.t_max) &&
-         ray.t_min <= ray.t_max;
-}
-
 // Front-to-back walk of the nodes the ray meets within [ray.t_min, t_max]; `leaf(facet, t_max)`
 // returns the new t_max, which prunes every node entered farther than it.
 template <class Volume, class Leaf>
 void ordered_ray_walk(const Tree<Volume>& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
-  if (tree.empty() || !valid_ray(ray)) return;
+  if (tree.empty() || !is_valid(ray)) return;
   const RayPrecomputed pre(ray);
   Real t_max = ray.t_max;
   struct Entry {
@@ -140,7 +130,7 @@ void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(F
 template <class Volume>
 void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit, QueryStats* stats) {
   StatsSink sink(stats);
-  if (tree.empty() || !valid_ray(ray)) return;
+  if (tree.empty() || !is_valid(ray)) return;
   const TriangleMesh& mesh = tree.mesh();
   const RayPrecomputed pre(ray);
   walk(

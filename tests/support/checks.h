@@ -54,8 +54,9 @@ inline Mat3 random_rotation(Random& r) {
 // `t_tolerance` > 0 (relative) is for ill-conditioned facets (slivers of aspect ratio ~1e12),
 // whose hit distances are accurate to about eps x aspect ratio only: there the closest hit must be
 // one of brute force's hits within that tolerance of its nearest, not necessarily the same facet.
-template <class V>
-void check_rays(const Tree<V>& tree, int count, std::uint64_t seed, const std::string& name, Real t_tolerance = 0) {
+// TreeT: Tree<V> or PackedAabbTree (anything with the query functions of query.h).
+template <class TreeT>
+void check_rays(const TreeT& tree, int count, std::uint64_t seed, const std::string& name, Real t_tolerance = 0) {
   const TriangleMesh& mesh = tree.mesh();
   const Aabb box = mesh_bounds(mesh);
   Random r(seed);
@@ -173,8 +174,8 @@ void check_planes_and_stabbing(const Tree<V>& tree, int count, const std::string
 
 // Tree vs tree at the identity and `poses - 1` random motions (translations up to `reach`),
 // against all-pairs brute force. Returns the number of pairs found.
-template <class V>
-std::size_t check_collide(const Tree<V>& a, const Tree<V>& b, int poses, Real reach, const std::string& name) {
+template <class TreeT>
+std::size_t check_collide(const TreeT& a, const TreeT& b, int poses, Real reach, const std::string& name) {
   Random r(5);
   std::size_t total = 0;
   for (int pose = 0; pose < poses; ++pose) {
@@ -195,10 +196,9 @@ std::size_t check_collide(const Tree<V>& a, const Tree<V>& b, int poses, Real re
 // graze the surface: it passes through the interior. Rays from outside aimed at a silhouette
 // edge may legitimately miss, so they are not used.) Checked for rays starting at the interior
 // point and for rays starting outside, beyond the target.
-template <class V>
-void check_watertight(const TriangleMesh& mesh, const Vec3& inside, const std::string& name, int count,
-                      const BuildSettings& settings = test_settings<V>()) {
-  const Tree<V> tree = build_tree<V>(mesh, settings);
+template <class TreeT>
+void check_watertight_tree(const TreeT& tree, const Vec3& inside, const std::string& name, int count) {
+  const TriangleMesh& mesh = tree.mesh();
   Random r(17);
   int misses = 0, brute_misses = 0;
   for (int i = 0; i < count; ++i) {
@@ -220,6 +220,12 @@ void check_watertight(const TriangleMesh& mesh, const Vec3& inside, const std::s
   }
   EXPECT_EQ(brute_misses, 0) << name << ": the ray-triangle test leaks";
   EXPECT_EQ(misses, 0) << name << ": the tree culls hits";
+}
+
+template <class V>
+void check_watertight(const TriangleMesh& mesh, const Vec3& inside, const std::string& name, int count,
+                      const BuildSettings& settings = test_settings<V>()) {
+  check_watertight_tree(build_tree<V>(mesh, settings), inside, name, count);
 }
 
 // A point inside a closed mesh: just behind a facet, on the side where a generic ray crosses

@@ -4,12 +4,18 @@
 // is a Tree<V> for the method's volume type V; every query forwards to the typed free functions
 // of query.h and collide.h (one virtual call per query, not per node).
 //
+// For the plain `aabb` method, build() holds the packed form (packed_tree.h: the same hierarchy
+// 4-wide, ~21 B per facet, quantized boxes; leaf_volume queries then report the facets whose packed
+// leaf box meets the shape), since that is what an engine's midphase wants; construct from a
+// Tree<Aabb> to hold the exact one instead.
+//
 // Copies share the same immutable tree (cheap; safe to use from many threads).
 #include <memory>
 #include <optional>
 
 #include "boxtree/collide.h"
 #include "boxtree/method.h"
+#include "boxtree/packed_tree.h"
 #include "boxtree/query.h"
 
 namespace boxtree {
@@ -19,8 +25,10 @@ class AnyTree {
   AnyTree() = default;
   template <class Volume>
   AnyTree(Tree<Volume> tree, const Method& method);
+  explicit AnyTree(PackedAabbTree tree);
 
-  // Validates the mesh (throws boxtree::Error) and builds its tree with `method`.
+  // Validates the mesh (throws boxtree::Error) and builds its tree with `method` (packed for
+  // the plain `aabb` method).
   static AnyTree build(std::shared_ptr<const TriangleMesh> mesh, const Method& method,
                        const BuildSettings& settings = {}, BuildStats* stats = nullptr);
 
@@ -39,6 +47,8 @@ class AnyTree {
   // The typed tree, or nullptr if this holds another volume kind.
   template <class Volume>
   const Tree<Volume>* get() const;
+  // The packed tree, or nullptr if this holds another form.
+  const PackedAabbTree* packed() const;
 
   // The queries of query.h and collide.h.
   std::optional<RayHit> ray_closest_hit(const Ray& ray, QueryStats* stats = nullptr) const;
@@ -56,7 +66,7 @@ class AnyTree {
                QueryStats* stats = nullptr, const CollideSettings& settings = {}) const;
 
   struct Concept;
-  template <class Volume>
+  template <class TreeType>
   struct Model;
 
  private:
@@ -64,7 +74,7 @@ class AnyTree {
   Method method_;
 };
 
-// ---- implementation: one virtual interface, one model per volume kind ----
+// ---- implementation: one virtual interface, one model per tree type ----
 struct AnyTree::Concept {
   virtual ~Concept() = default;
   virtual const TriangleMesh& mesh() const = 0;
@@ -83,10 +93,11 @@ struct AnyTree::Concept {
                        const CollideSettings&) const = 0;
 };
 
-template <class Volume>
+// TreeType: Tree<V> for a volume kind V, or PackedAabbTree.
+template <class TreeType>
 struct AnyTree::Model final : AnyTree::Concept {
-  explicit Model(Tree<Volume> t) : tree(std::move(t)) {}
-  Tree<Volume> tree;
+  explicit Model(TreeType t) : tree(std::move(t)) {}
+  TreeType tree;
 
   const TriangleMesh& mesh() const override { return tree.mesh(); }
   const std::shared_ptr<const TriangleMesh>& shared_mesh() const override { return tree.shared_mesh(); }
@@ -119,11 +130,11 @@ struct AnyTree::Model final : AnyTree::Concept {
 
 template <class Volume>
 AnyTree::AnyTree(Tree<Volume> tree, const Method& method)
-    : impl_(tree.empty() ? nullptr : std::make_shared<const Model<Volume>>(std::move(tree))), method_(method) {}
+    : impl_(tree.empty() ? nullptr : std::make_shared<const Model<Tree<Volume>>>(std::move(tree))), method_(method) {}
 
 template <class Volume>
 const Tree<Volume>* AnyTree::get() const {
-  const auto* model = dynamic_cast<const Model<Volume>*>(impl_.get());
+  const auto* model = dynamic_cast<const Model<Tree<Volume>>*>(impl_.get());
   return model ? &model->tree : nullptr;
 }
 

@@ -31,6 +31,19 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
 bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box);
 bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& sphere);
 bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule);
+// The four above by overload, for code generic over the query shape.
+inline bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& s) {
+  return triangle_overlaps_aabb(a, b, c, s);
+}
+inline bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& s) {
+  return triangle_overlaps_obb(a, b, c, s);
+}
+inline bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& s) {
+  return triangle_overlaps_sphere(a, b, c, s);
+}
+inline bool triangle_overlaps(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& s) {
+  return triangle_overlaps_capsule(a, b, c, s);
+}
 // True if the triangle touches the plane or has corners on both sides of it.
 bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane);
 

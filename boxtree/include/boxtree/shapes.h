@@ -2,6 +2,7 @@
 // Query shapes: small value types, no behaviour beyond construction. The tests between them
 // and triangles live in geometry.h; the tests between them and node volumes live beside each
 // volume type (volume/aabb.h, ...).
+#include <cmath>
 #include <limits>
 
 #include "boxtree/mesh.h"
@@ -16,6 +17,13 @@ struct Ray {
   Real t_min = 0;
   Real t_max = std::numeric_limits<Real>::infinity();
 };
+
+// What every ray query accepts: finite origin and direction, and a t range that is not NaN and
+// not empty. Queries answer "no hit" for anything else.
+inline bool is_valid(const Ray& ray) {
+  return ray.origin.allFinite() && ray.direction.allFinite() && !std::isnan(ray.t_min) && !std::isnan(ray.t_max) &&
+         ray.t_min <= ray.t_max;
+}
 
 struct Sphere {
   Vec3 center = Vec3::Zero();

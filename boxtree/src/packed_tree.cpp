@@ -1,0 +1,602 @@
+#include "boxtree/packed_tree.h"
+
+#include <algorithm>
+#include <cmath>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace boxtree {
+
+namespace {
+
+constexpr Real kMaxQ = 65535;
+constexpr int kWidth = PackedAabbTree::kWidth;
+// Depth-first walks push at most kWidth - 1 entries per level.
+constexpr int kStackSize = (kWidth - 1) * PackedAabbTree::kMaxHeight + kWidth;
+
+}  // namespace
+
+std::uint16_t PackedAabbTree::quantize_down(Real x, int axis) const {
+  Real q = std::floor((x - origin_[axis]) * inv_step_[axis]);
+  q = std::clamp(q, Real(0), kMaxQ);  // NaN-free: callers pass finite or clamped values
+  // The multiply may round either way; step down until the grid value is really <= x.
+  while (q > 0 && value(q, axis) > x) q -= 1;
+  return std::uint16_t(q);
+}
+
+std::uint16_t PackedAabbTree::quantize_up(Real x, int axis) const {
+  Real q = std::ceil((x - origin_[axis]) * inv_step_[axis]);
+  q = std::clamp(q, Real(0), kMaxQ);
+  while (q < kMaxQ && value(q, axis) < x) q += 1;
+  return std::uint16_t(q);
+}
+
+PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
+  if (tree.empty()) return;
+  mesh_ = tree.shared_mesh();
+  height_ = 0;
+  bounds_ = tree.volume(tree.root());
+
+  // The grid spans the bounds plus kSpareSteps + 1 steps on each side, so that every box can be
+  // rounded outward by kSpareSteps and still fit in 16 bits. A flat axis (a planar terrain's
+  // height) gets a tiny but non-zero step, relative to the mesh's size and position, so that
+  // the grid stays invertible; its boxes are then exact to that step.
+  const Vec3 extent = bounds_.extent();
+  const Real magnitude = std::max(bounds_.min.cwiseAbs().maxCoeff(), bounds_.max.cwiseAbs().maxCoeff());
+  const Real floor_extent = std::max({extent.maxCoeff() * Real(1e-9), magnitude * Real(1e-12), Real(1e-30)});
+  constexpr int kMargin = kSpareSteps + 1;
+  for (int i = 0; i < 3; ++i) {
+    const Real span = std::max(extent[i], floor_extent);
+    step_[i] = span / (kMaxQ - 2 * kMargin);
+    inv_step_[i] = 1 / step_[i];
+    origin_[i] = bounds_.min[i] - kMargin * step_[i];
+  }
+
+  if (tree.is_leaf(tree.root())) {
+    root_link_ = kLeafFlag | tree.facet(tree.root());
+    return;
+  }
+  root_link_ = 0;
+  // Which source nodes become packed nodes, bottom-up: slots[v] are the children that v would
+  // have as a packed node: its two children, with a child's own slots taken in (the child then
+  // needs no packed node of its own) whenever they fit in four, the larger child first. Leaves
+  // pair up into full nodes at the bottom, so there are about n / 3 packed nodes whatever the
+  // parity of the levels (collapsing every two levels from the top leaves half the bottom nodes
+  // with two children).
+  struct Slots {
+    NodeIndex child[kWidth];
+    int count = 0;
+  };
+  std::vector<Slots> slots(tree.node_count());
+  // Children come after their parent in Tree's layout: a reverse sweep sees children first.
+  for (NodeIndex v = NodeIndex(tree.node_count()); v-- > 0;) {
+    if (tree.is_leaf(v)) continue;
+    const NodeIndex c0 = tree.first_child(v), c1 = c0 + 1;
+    const auto size = [&](NodeIndex c) { return tree.is_leaf(c) ? 1 : slots[c].count; };
+    bool take[2] = {false, false};
+    if (!tree.is_leaf(c0) && !tree.is_leaf(c1) && size(c0) + size(c1) <= kWidth) {
+      take[0] = take[1] = true;
+    } else {
+      // Take in one child's slots: the one with the larger box, if it fits.
+      const bool larger_first = surface_area(tree.volume(c0)) >= surface_area(tree.volume(c1));
+      for (int k : {larger_first ? 0 : 1, larger_first ? 1 : 0}) {
+        const NodeIndex c = c0 + NodeIndex(k);
+        if (!tree.is_leaf(c) && size(c) + 1 <= kWidth) {
+          take[k] = true;
+          break;
+        }
+      }
+    }
+    Slots& s = slots[v];
+    for (int k = 0; k < 2; ++k) {
+      const NodeIndex c = c0 + NodeIndex(k);
+      if (take[k]) {
+        for (int i = 0; i < slots[c].count; ++i) s.child[s.count++] = slots[c].child[i];
+      } else {
+        s.child[s.count++] = c;
+      }
+    }
+  }
+  nodes_.reserve(tree.facet_count() / 2);
+  // Depth first, preorder: a node's first inner child is the next node (what the walks read
+  // next). Each pending entry is a source node to pack, where its packed index must be written,
+  // and its depth in the packed tree.
+  struct Pending {
+    NodeIndex source;
+    std::uint32_t parent;  // packed index of the parent (unused for the root)
+    int slot;              // which of the parent's links points here; -1 for the root
+    int depth;
+  };
+  std::vector<Pending> pending{{tree.root(), 0, -1, 0}};
+  while (!pending.empty()) {
+    const Pending p = pending.back();
+    pending.pop_back();
+    const auto index = std::uint32_t(nodes_.size());
+    if (p.slot >= 0) nodes_[p.parent].link[p.slot] = index;
+    const NodeIndex* children = slots[p.source].child;
+    const int count = slots[p.source].count;
+    Node& node = nodes_.emplace_back();
+    for (int slot = 0; slot < kWidth; ++slot) {
+      if (slot >= count) {  // an empty box (min > max) and no link
+        for (int i = 0; i < 3; ++i) node.min[i][slot] = 0xFFFF, node.max[i][slot] = 0;
+        node.link[slot] = kEmpty;
+        continue;
+      }
+      const Aabb& box = tree.volume(children[slot]);
+      for (int i = 0; i < 3; ++i) {
+        node.min[i][slot] = std::uint16_t(quantize_down(box.min[i], i) - kSpareSteps);
+        node.max[i][slot] = std::uint16_t(quantize_up(box.max[i], i) + kSpareSteps);
+      }
+      node.link[slot] = tree.is_leaf(children[slot]) ? (kLeafFlag | tree.facet(children[slot])) : 0;  // inner: set when laid out
+      if (tree.is_leaf(children[slot])) height_ = std::max(height_, p.depth + 1);
+    }
+    // Pushed last to first, so that the first inner child's subtree is laid out right after.
+    for (int slot = count - 1; slot >= 0; --slot)
+      if (!tree.is_leaf(children[slot])) pending.push_back({children[slot], index, slot, p.depth + 1});
+  }
+  nodes_.shrink_to_fit();
+}
+
+namespace {
+
+struct StatsSink {
+  QueryStats local;
+  QueryStats* out;
+  explicit StatsSink(QueryStats* o) : out(o) {}
+  ~StatsSink() {
+    if (out) *out += local;
+  }
+};
+
+// A query box on the packed grid, rounded outward (so it contains the exact box).
+struct GridBox {
+  std::uint16_t min[3];
+  std::uint16_t max[3];
+#if defined(__SSE2__)
+  // The same box as lanes for SSE2 (x in lanes 0-3, y in 4-7; z in 0-3), offset by -32768
+  // (xor 0x8000) so that SSE2's signed 16-bit compares order the unsigned grid values.
+  __m128i min_xy, max_xy, min_z, max_z;
+  void prepare() {
+    const auto lanes = [](std::uint16_t lo, std::uint16_t hi) {
+      return _mm_setr_epi16(short(lo ^ 0x8000), short(lo ^ 0x8000), short(lo ^ 0x8000), short(lo ^ 0x8000),
+                            short(hi ^ 0x8000), short(hi ^ 0x8000), short(hi ^ 0x8000), short(hi ^ 0x8000));
+    };
+    min_xy = lanes(min[0], min[1]);
+    max_xy = lanes(max[0], max[1]);
+    min_z = lanes(min[2], min[2]);
+    max_z = lanes(max[2], max[2]);
+  }
+  // Bit c set: child c's box overlaps: four boxes in a handful of instructions.
+  unsigned overlaps(const PackedAabbTree::Node& node) const {
+    const __m128i bias = _mm_set1_epi16(short(0x8000));
+    const auto load16 = [&](const std::uint16_t* p) {
+      return _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), bias);
+    };
+    const auto load8 = [&](const std::uint16_t* p) {
+      return _mm_xor_si128(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), bias);
+    };
+    // Apart on an axis: the node's min above the query's max, or the query's min above the node's max.
+    const __m128i apart_xy = _mm_or_si128(_mm_cmpgt_epi16(load16(&node.min[0][0]), max_xy),
+                                          _mm_cmpgt_epi16(min_xy, load16(&node.max[0][0])));
+    const __m128i apart_z = _mm_or_si128(_mm_cmpgt_epi16(load8(&node.min[2][0]), max_z),
+                                         _mm_cmpgt_epi16(min_z, load8(&node.max[2][0])));
+    const __m128i apart = _mm_or_si128(_mm_or_si128(apart_xy, _mm_unpackhi_epi64(apart_xy, apart_xy)), apart_z);
+    return ~unsigned(_mm_movemask_epi8(_mm_packs_epi16(apart, apart))) & 0xFu;
+  }
+#else
+  void prepare() {}
+  unsigned overlaps(const PackedAabbTree::Node& node) const {
+    unsigned mask = 0;
+    for (int c = 0; c < kWidth; ++c) {
+      const bool hit = (min[0] <= node.max[0][c]) & (node.min[0][c] <= max[0]) & (min[1] <= node.max[1][c]) &
+                       (node.min[1][c] <= max[1]) & (min[2] <= node.max[2][c]) & (node.min[2][c] <= max[2]);
+      mask |= unsigned(hit) << c;
+    }
+    return mask;
+  }
+#endif
+};
+
+// Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c);
+// `leaf(facet)` returns false to stop. The caller has tested the root's volume (the exact bounds).
+template <class ChildMask, class Leaf>
+void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, QueryStats& stats) {
+  const std::uint32_t root = tree.root_link();
+  ++stats.nodes_visited;
+  if (PackedAabbTree::is_leaf(root)) {
+    leaf(PackedAabbTree::facet(root));
+    return;
+  }
+  const PackedAabbTree::Node* nodes = tree.nodes().data();
+  std::uint32_t stack[kStackSize];
+  int top = 0;
+  std::uint32_t current = root;
+  for (;;) {
+    const PackedAabbTree::Node& node = nodes[current];
+    stats.volume_tests += kWidth;
+    unsigned mask = child_mask(node);
+    // Leaves are handled at once; of the inner children, descend into the first, keep the rest.
+    bool descend = false;
+    while (mask != 0) {
+      const int slot = __builtin_ctz(mask);
+      mask &= mask - 1;
+      const std::uint32_t link = node.link[slot];
+      if (link == PackedAabbTree::kEmpty) continue;
+      ++stats.nodes_visited;
+      if (PackedAabbTree::is_leaf(link)) {
+        if (!leaf(PackedAabbTree::facet(link))) return;
+      } else if (!descend) {
+        current = link;
+        descend = true;
+      } else {
+        // Read only after the current subtree: start loading it now (it is far in the array).
+        __builtin_prefetch(&nodes[link]);
+        stack[top++] = link;
+      }
+    }
+    if (descend) continue;
+    if (top == 0) return;
+    current = stack[--top];
+  }
+}
+
+// Bit c set: child c's (dequantized) box passes `test(box)`.
+template <class Test>
+unsigned mask_of(const PackedAabbTree& tree, const PackedAabbTree::Node& node, Test&& test) {
+  unsigned mask = 0;
+  for (int c = 0; c < kWidth; ++c)
+    if (node.link[c] != PackedAabbTree::kEmpty && test(tree.child_box(node, c))) mask |= 1u << c;
+  return mask;
+}
+
+// The ray in grid coordinates, restarted at its first point in the mesh's bounds (t = base) and
+// scaled so that its largest direction component is 1 (parameter s = (t - base) / scale): there
+// grid coordinates are at most ~65,536, so single precision places the ray to ~0.01 of a grid
+// step, far inside the step that every packed box keeps to spare around the exact box. Float
+// slab tests of four boxes at once are therefore conservative: a ray that meets an exact box
+// meets its packed box in an interval about two steps long, and rounding moves the ends by a
+// percent of that.
+struct GridRay {
+  Real base = 0;
+  Real scale = 1;
+  float origin[3];
+  float inv_direction[3];
+
+  GridRay(const PackedAabbTree& tree, const Ray& ray, Real t_first) : base(t_first) {
+    const Vec3 start = ray.origin + t_first * ray.direction;
+    Vec3 o = (start - tree.origin()).cwiseQuotient(tree.step());
+    Vec3 d = ray.direction.cwiseQuotient(tree.step());
+    scale = 1 / std::max(d.cwiseAbs().maxCoeff(), std::numeric_limits<Real>::min());
+    d *= scale;
+    for (int i = 0; i < 3; ++i) {
+      // A (nearly) parallel axis gets a tiny non-zero component: its slab then spans +-huge s.
+      const Real di = std::abs(d[i]) < 1e-20 ? std::copysign(Real(1e-20), d[i]) : d[i];
+      origin[i] = float(o[i]);
+      inv_direction[i] = float(1 / di);
+    }
+  }
+  // s of a ray parameter t, rounded outward (down for the start of a range, up for its end).
+  float s_down(Real t) const { return std::nextafter(float((t - base) / scale), -HUGE_VALF); }
+  float s_up(Real t) const { return std::nextafter(float((t - base) / scale), HUGE_VALF); }
+  Real t_of(float s) const { return base + Real(s) * scale; }
+
+  // Bit c set: the ray meets child c's box for s in [s_lo, s_hi]; s_enter[c] is where it enters.
+  unsigned hits(const PackedAabbTree::Node& node, float s_lo, float s_hi, float s_enter[kWidth]) const {
+#if defined(__SSE2__)
+    const __m128i zero = _mm_setzero_si128();
+    __m128 near = _mm_set1_ps(s_lo);
+    __m128 far = _mm_set1_ps(s_hi);
+    for (int i = 0; i < 3; ++i) {
+      const auto corner = [&](const std::uint16_t* p) {
+        return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero));
+      };
+      const __m128 o = _mm_set1_ps(origin[i]);
+      const __m128 inv = _mm_set1_ps(inv_direction[i]);
+      const __m128 t0 = _mm_mul_ps(_mm_sub_ps(corner(node.min[i]), o), inv);
+      const __m128 t1 = _mm_mul_ps(_mm_sub_ps(corner(node.max[i]), o), inv);
+      near = _mm_max_ps(near, _mm_min_ps(t0, t1));
+      far = _mm_min_ps(far, _mm_max_ps(t0, t1));
+    }
+    _mm_storeu_ps(s_enter, near);
+    return unsigned(_mm_movemask_ps(_mm_cmple_ps(near, far)));
+#else
+    unsigned mask = 0;
+    for (int c = 0; c < kWidth; ++c) {
+      float near = s_lo, far = s_hi;
+      for (int i = 0; i < 3; ++i) {
+        const float t0 = (float(node.min[i][c]) - origin[i]) * inv_direction[i];
+        const float t1 = (float(node.max[i][c]) - origin[i]) * inv_direction[i];
+        near = std::max(near, std::min(t0, t1));
+        far = std::min(far, std::max(t0, t1));
+      }
+      s_enter[c] = near;
+      if (near <= far) mask |= 1u << c;
+    }
+    return mask;
+#endif
+  }
+};
+
+// Front-to-back ray walk. `leaf(facet, t_max)` may lower t_max (which prunes everything entered
+// farther) and returns false to stop the walk.
+template <class Leaf>
+void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
+  if (tree.empty() || !is_valid(ray)) return;
+  Real t_max = ray.t_max;
+  Real t_enter = 0;
+  ++stats.volume_tests;
+  if (!intersect_ray(tree.bounds(), RayPrecomputed(ray), ray.t_min, t_max, &t_enter)) return;
+  const GridRay grid(tree, ray, t_enter);
+  const float s_min = grid.s_down(ray.t_min);
+  const PackedAabbTree::Node* nodes = tree.nodes().data();
+
+  struct Entry {
+    std::uint32_t link;
+    Real t_enter;
+  };
+  Entry stack[kStackSize];
+  int top = 0;
+  stack[top++] = {tree.root_link(), t_enter};
+  while (top > 0) {
+    const Entry entry = stack[--top];
+    if (entry.t_enter > t_max) continue;  // a closer hit was found since this was pushed
+    ++stats.nodes_visited;
+    if (PackedAabbTree::is_leaf(entry.link)) {
+      if (!leaf(PackedAabbTree::facet(entry.link), t_max)) return;
+      continue;
+    }
+    const PackedAabbTree::Node& node = nodes[entry.link];
+    float s_enter[kWidth];
+    unsigned mask = grid.hits(node, s_min, grid.s_up(t_max), s_enter);
+    stats.volume_tests += kWidth;
+    // The children met, sorted by entry (insertion sort of at most four), pushed farthest first
+    // so that the nearest is explored first.
+    Entry hits[kWidth];
+    int count = 0;
+    while (mask != 0) {
+      const int slot = __builtin_ctz(mask);
+      mask &= mask - 1;
+      const std::uint32_t link = node.link[slot];
+      if (link == PackedAabbTree::kEmpty) continue;
+      if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes[link]);
+      const Real t = std::max(grid.t_of(s_enter[slot]), ray.t_min);
+      int k = count++;
+      for (; k > 0 && hits[k - 1].t_enter > t; --k) hits[k] = hits[k - 1];
+      hits[k] = {link, t};
+    }
+    for (int k = count - 1; k >= 0; --k) stack[top++] = hits[k];
+  }
+}
+
+}  // namespace
+
+std::optional<RayHit> ray_closest_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
+  StatsSink sink(stats);
+  std::optional<RayHit> best;
+  ordered_ray_walk(
+      tree, ray,
+      [&](FacetId f, Real& t_max) {
+        ++sink.local.leaf_tests;
+        const TriangleMesh& mesh = tree.mesh();
+        TriangleHit hit;
+        Ray clipped = ray;
+        clipped.t_max = t_max;
+        if (intersect_ray_triangle(clipped, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
+          if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
+          t_max = std::min(t_max, best->t);
+        }
+        return true;
+      },
+      sink.local);
+  return best;
+}
+
+void ray_candidates(const PackedAabbTree& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats) {
+  StatsSink sink(stats);
+  ordered_ray_walk(
+      tree, ray,
+      [&](FacetId f, Real& t_max) {
+        ++sink.local.leaf_tests;
+        t_max = std::min(t_max, visit(f, t_max));
+        return t_max >= ray.t_min;  // the visitor may stop the walk with a t below t_min
+      },
+      sink.local);
+}
+
+void ray_all_hits(const PackedAabbTree& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit,
+                  QueryStats* stats) {
+  // Every hit: the ordered walk without ever shortening the ray.
+  StatsSink sink(stats);
+  ordered_ray_walk(
+      tree, ray,
+      [&](FacetId f, Real&) {
+        ++sink.local.leaf_tests;
+        const TriangleMesh& mesh = tree.mesh();
+        TriangleHit hit;
+        if (!intersect_ray_triangle(ray, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        return visit(RayHit{f, hit.t, hit.u, hit.v});
+      },
+      sink.local);
+}
+
+std::optional<RayHit> ray_any_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
+  std::optional<RayHit> found;
+  ray_all_hits(
+      tree, ray,
+      [&](const RayHit& hit) {
+        found = hit;
+        return false;
+      },
+      stats);
+  return found;
+}
+
+std::vector<RayHit> ray_all_hits(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
+  std::vector<RayHit> hits;
+  ray_all_hits(
+      tree, ray,
+      [&](const RayHit& hit) {
+        hits.push_back(hit);
+        return true;
+      },
+      stats);
+  std::sort(hits.begin(), hits.end(),
+            [](const RayHit& x, const RayHit& y) { return x.t != y.t ? x.t < y.t : x.facet < y.facet; });
+  return hits;
+}
+
+template <class Shape>
+void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit,
+                   QueryStats* stats, FacetTest test) {
+  StatsSink sink(stats);
+  if (tree.empty()) return;
+  ++sink.local.volume_tests;
+  if (!overlaps(tree.bounds(), shape)) return;
+  const TriangleMesh& mesh = tree.mesh();
+  const auto leaf = [&](FacetId f) {
+    if (test == FacetTest::exact_triangle) {
+      ++sink.local.leaf_tests;
+      if (!triangle_overlaps(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), shape)) return true;
+    }
+    return visit(f);
+  };
+  if constexpr (std::is_same_v<Shape, Aabb>) {
+    // The query box on the grid, clamped to the bounds first (an infinite side is fine), so
+    // that every node test is six integer compares.
+    GridBox grid;
+    for (int i = 0; i < 3; ++i) {
+      grid.min[i] = tree.quantize_down(std::max(shape.min[i], tree.bounds().min[i]), i);
+      grid.max[i] = tree.quantize_up(std::min(shape.max[i], tree.bounds().max[i]), i);
+    }
+    grid.prepare();
+    walk(
+        tree, [&](const PackedAabbTree::Node& node) { return grid.overlaps(node); }, leaf, sink.local);
+  } else {
+    walk(
+        tree,
+        [&](const PackedAabbTree::Node& node) {
+          return mask_of(tree, node, [&](const Aabb& box) { return overlaps(box, shape); });
+        },
+        leaf, sink.local);
+  }
+}
+
+template <class Shape>
+std::vector<FacetId> query_overlap(const PackedAabbTree& tree, const Shape& shape, QueryStats* stats,
+                                   FacetTest test) {
+  std::vector<FacetId> facets;
+  query_overlap<Shape>(
+      tree, shape,
+      [&](FacetId f) {
+        facets.push_back(f);
+        return true;
+      },
+      stats, test);
+  std::sort(facets.begin(), facets.end());
+  return facets;
+}
+
+namespace {
+
+// A node of the hierarchy as the tree-vs-tree walk sees it: the root, or child `slot` of an
+// inner node (whose box and link live in that inner node).
+struct NodeRef {
+  static constexpr std::uint32_t kRoot = 0xFFFFFFFFu;
+  std::uint32_t value = kRoot;  // kRoot or inner * kWidth + slot
+};
+
+std::uint32_t link_of(const PackedAabbTree& tree, NodeRef ref) {
+  if (ref.value == NodeRef::kRoot) return tree.root_link();
+  return tree.nodes()[ref.value / kWidth].link[ref.value % kWidth];
+}
+
+Aabb box_of(const PackedAabbTree& tree, NodeRef ref) {
+  if (ref.value == NodeRef::kRoot) return tree.bounds();
+  return tree.child_box(tree.nodes()[ref.value / kWidth], int(ref.value % kWidth));
+}
+
+}  // namespace
+
+void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransform& a_from_b,
+             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
+  if (!a_from_b.translation.allFinite() || !is_rotation(a_from_b.rotation, 1e-6))
+    throw Error("collide: the transform's rotation is not orthonormal with determinant +1, or not finite");
+  if (a.empty() || b.empty()) return;
+  StatsSink sink(stats);
+  QueryStats& local = sink.local;
+  const TriangleMesh& mesh_a = a.mesh();
+  const TriangleMesh& mesh_b = b.mesh();
+  struct Pair {
+    NodeRef a, b;
+    Aabb box_a, box_b;
+  };
+  // Each step pops one pair and pushes at most kWidth, one level deeper in a or b: at most
+  // (kWidth - 1) * (height(a) + height(b)) + 1 pairs are ever pending.
+  Pair stack[(kWidth - 1) * 2 * PackedAabbTree::kMaxHeight + kWidth];
+  int top = 0;
+  ++local.volume_tests;
+  if (overlaps(a.bounds(), b.bounds(), a_from_b)) stack[top++] = {NodeRef{}, NodeRef{}, a.bounds(), b.bounds()};
+  while (top > 0) {
+    const Pair pair = stack[--top];
+    ++local.nodes_visited;
+    const std::uint32_t link_a = link_of(a, pair.a);
+    const std::uint32_t link_b = link_of(b, pair.b);
+    const bool leaf_a = PackedAabbTree::is_leaf(link_a);
+    const bool leaf_b = PackedAabbTree::is_leaf(link_b);
+    if (leaf_a && leaf_b) {
+      const FacetId fa = PackedAabbTree::facet(link_a);
+      const FacetId fb = PackedAabbTree::facet(link_b);
+      ++local.leaf_tests;
+      if (triangles_intersect(mesh_a.corner(fa, 0), mesh_a.corner(fa, 1), mesh_a.corner(fa, 2),
+                              a_from_b.apply(mesh_b.corner(fb, 0)), a_from_b.apply(mesh_b.corner(fb, 1)),
+                              a_from_b.apply(mesh_b.corner(fb, 2)))) {
+        if (!visit(FacetPair{fa, fb}) || settings.stop_at_first) return;
+      }
+      continue;
+    }
+    // Split the larger box (or the one that is not a leaf), as collide.cpp does.
+    const bool split_a = !leaf_a && (leaf_b || surface_area(pair.box_a) >= surface_area(pair.box_b));
+    const PackedAabbTree::Node& split = split_a ? a.nodes()[link_a] : b.nodes()[link_b];
+    for (int slot = kWidth - 1; slot >= 0; --slot) {
+      if (split.link[slot] == PackedAabbTree::kEmpty) continue;
+      ++local.volume_tests;
+      Pair child = pair;
+      if (split_a) {
+        child.a.value = link_a * kWidth + std::uint32_t(slot);
+        child.box_a = box_of(a, child.a);
+      } else {
+        child.b.value = link_b * kWidth + std::uint32_t(slot);
+        child.box_b = box_of(b, child.b);
+      }
+      if (overlaps(child.box_a, child.box_b, a_from_b)) stack[top++] = child;
+    }
+  }
+}
+
+std::vector<FacetPair> collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransform& a_from_b,
+                               QueryStats* stats, const CollideSettings& settings) {
+  std::vector<FacetPair> pairs;
+  collide(
+      a, b, a_from_b,
+      [&](const FacetPair& p) {
+        pairs.push_back(p);
+        return true;
+      },
+      stats, settings);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+#define BOXTREE_INSTANTIATE_PACKED_OVERLAP(S)                                                               \
+  template void query_overlap<S>(const PackedAabbTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, \
+                                 FacetTest);                                                                \
+  template std::vector<FacetId> query_overlap<S>(const PackedAabbTree&, const S&, QueryStats*, FacetTest);
+BOXTREE_INSTANTIATE_PACKED_OVERLAP(Aabb)
+BOXTREE_INSTANTIATE_PACKED_OVERLAP(Obb)
+BOXTREE_INSTANTIATE_PACKED_OVERLAP(Sphere)
+BOXTREE_INSTANTIATE_PACKED_OVERLAP(Capsule)
+
+}  // namespace boxtree

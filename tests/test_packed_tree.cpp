@@ -1,0 +1,236 @@
+// The packed axis-aligned tree (packed_tree.h) against the exact Tree<Aabb> it is packed from and
+// against brute force: a valid 4-wide packing, conservative boxes, the same query results.
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "boxtree/any_tree.h"
+#include "boxtree/build.h"
+#include "boxtree/packed_tree.h"
+#include "support/brute_force.h"
+#include "support/checks.h"
+#include "support/meshes.h"
+
+namespace boxtree {
+namespace {
+
+using namespace test;
+
+// Where each facet's leaf sits: (inner node, slot), or (-1, 0) for a single-facet tree.
+std::map<FacetId, std::pair<long, int>> leaf_slots(const PackedAabbTree& packed) {
+  std::map<FacetId, std::pair<long, int>> slots;
+  if (PackedAabbTree::is_leaf(packed.root_link())) slots[PackedAabbTree::facet(packed.root_link())] = {-1, 0};
+  for (std::size_t n = 0; n < packed.nodes().size(); ++n)
+    for (int slot = 0; slot < PackedAabbTree::kWidth; ++slot) {
+      const std::uint32_t link = packed.nodes()[n].link[slot];
+      if (PackedAabbTree::is_leaf(link)) {
+        EXPECT_TRUE(slots.emplace(PackedAabbTree::facet(link), std::make_pair(long(n), slot)).second)
+            << "facet " << PackedAabbTree::facet(link) << " in two leaves";
+      }
+    }
+  return slots;
+}
+
+Aabb packed_leaf_box(const PackedAabbTree& packed, const std::pair<long, int>& slot) {
+  return slot.first < 0 ? packed.bounds() : packed.child_box(packed.nodes()[std::size_t(slot.first)], slot.second);
+}
+
+// The packed tree's structure: every facet in exactly one leaf, every node with two to four
+// children (used slots first), the first inner child laid out next, and every packed box holding
+// the exact boxes of all facets below it with at least one grid step to spare.
+void expect_valid_packing(const Tree<Aabb>& tree, const PackedAabbTree& packed, const std::string& name) {
+  const TriangleMesh& mesh = tree.mesh();
+  EXPECT_EQ(packed.memory_bytes(), sizeof(PackedAabbTree::Node) * packed.nodes().size()) << name;
+  EXPECT_LE(packed.memory_bytes(), 32 * mesh.facet_count()) << name;
+  EXPECT_LE(packed.height(), tree.height()) << name;
+  EXPECT_EQ(packed.node_count(), packed.nodes().size() + mesh.facet_count()) << name;
+  const auto slots = leaf_slots(packed);
+  ASSERT_EQ(slots.size(), mesh.facet_count()) << name << ": every facet in exactly one leaf";
+  EXPECT_TRUE(contains(packed.bounds(), Aabb(mesh_bounds(mesh)))) << name;
+  if (PackedAabbTree::is_leaf(packed.root_link())) return;
+  // Exact box of the facets below each link, bottom-up (children come after their parent).
+  std::vector<Aabb> below(packed.nodes().size());
+  const auto box_of_link = [&](std::uint32_t link) {
+    if (!PackedAabbTree::is_leaf(link)) return below[link];
+    const FacetId f = PackedAabbTree::facet(link);
+    return Aabb::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+  };
+  const Vec3 spare = packed.step() * 0.999;
+  int max_height = 0;
+  std::vector<int> depth(packed.nodes().size(), 0);
+  for (std::size_t n = packed.nodes().size(); n-- > 0;) {
+    const PackedAabbTree::Node& node = packed.nodes()[n];
+    int used = 0;
+    Aabb all = Aabb::empty();
+    bool first_inner = true;
+    for (int slot = 0; slot < PackedAabbTree::kWidth; ++slot) {
+      const std::uint32_t link = node.link[slot];
+      if (link == PackedAabbTree::kEmpty) continue;
+      EXPECT_EQ(used, slot) << name << ": used slots first";
+      ++used;
+      if (!PackedAabbTree::is_leaf(link)) {
+        EXPECT_GT(link, n) << name << ": children after their parent";
+        if (first_inner) {
+          EXPECT_EQ(link, n + 1) << name << ": first inner child next";
+        }
+        first_inner = false;
+      }
+      const Aabb exact = box_of_link(link);
+      const Aabb box = packed.child_box(node, slot);
+      EXPECT_TRUE((box.min.array() <= (exact.min - spare).array()).all() &&
+                  (box.max.array() >= (exact.max + spare).array()).all())
+          << name << ": packed box must hold the facets below it with a step to spare";
+      all = Aabb::enclosing(all, exact);
+    }
+    EXPECT_GE(used, 2) << name;
+    below[n] = all;
+  }
+  for (std::size_t n = 0; n < packed.nodes().size(); ++n)
+    for (std::uint32_t link : packed.nodes()[n].link)
+      if (link != PackedAabbTree::kEmpty) {
+        const int d = depth[n] + 1;
+        if (PackedAabbTree::is_leaf(link)) {
+          max_height = std::max(max_height, d);
+        } else {
+          depth[link] = d;
+        }
+      }
+  EXPECT_EQ(packed.height(), max_height) << name;
+}
+
+// Exact-triangle queries give brute force's answer; leaf-volume queries report exactly the facets
+// whose packed leaf box meets the shape (for an Aabb query, tested on the grid: also those within
+// one grid step of it), so always a superset of the exact tree's leaf-volume answer.
+template <class Shape>
+void expect_overlaps(const Tree<Aabb>& tree, const PackedAabbTree& packed,
+                     const std::map<FacetId, std::pair<long, int>>& slots, const Shape& shape, const std::string& what) {
+  EXPECT_EQ(query_overlap(packed, shape), brute_overlap(packed.mesh(), shape)) << what;
+  const std::vector<FacetId> got = query_overlap(packed, shape, nullptr, FacetTest::leaf_volume);
+  const std::vector<FacetId> exact_leaves = query_overlap(tree, shape, nullptr, FacetTest::leaf_volume);
+  EXPECT_TRUE(std::includes(got.begin(), got.end(), exact_leaves.begin(), exact_leaves.end())) << what;
+  std::vector<FacetId> expected;
+  for (const auto& [facet, slot] : slots) {
+    Aabb box = packed_leaf_box(packed, slot);
+    if (overlaps(box, shape)) expected.push_back(facet);
+  }
+  if constexpr (std::is_same_v<Shape, Aabb>) {
+    EXPECT_TRUE(std::includes(got.begin(), got.end(), expected.begin(), expected.end())) << what;
+    for (FacetId f : got) {
+      Aabb box = packed_leaf_box(packed, slots.at(f));
+      box.min -= packed.step() * 1.001;
+      box.max += packed.step() * 1.001;
+      EXPECT_TRUE(overlaps(box, shape)) << what << ": facet " << f << " is farther than a grid step";
+    }
+  } else {
+    EXPECT_EQ(got, expected) << what;
+  }
+}
+
+void check_packed(const TriangleMesh& mesh, const std::string& name, int queries) {
+  const Tree<Aabb> tree = build_tree<Aabb>(mesh);
+  const PackedAabbTree packed(tree);
+  expect_valid_packing(tree, packed, name);
+  check_rays(packed, queries, 3, name);
+  const auto slots = leaf_slots(packed);
+  const Aabb box = mesh_bounds(mesh);
+  const double size = box.extent().norm();
+  Random r(41);
+  std::size_t reported = 0;
+  for (int i = 0; i < queries; ++i) {
+    const Vec3 c = random_point_near(r, box);
+    const double s = size * r.uniform(0.001, 0.2);
+    expect_overlaps(tree, packed, slots, Aabb::from_points(c, c + r.uniform_vec3(-s, s)), name + " aabb");
+    Obb obb{c, random_rotation(r), r.uniform_vec3(0, s)};
+    if (i % 7 == 0) obb.half_extents[i % 3] = 0;
+    expect_overlaps(tree, packed, slots, obb, name + " obb");
+    expect_overlaps(tree, packed, slots, Sphere{c, s}, name + " sphere");
+    expect_overlaps(tree, packed, slots, Capsule{c, c + r.unit_vector() * s * 2, s * 0.3}, name + " capsule");
+    reported += query_overlap(packed, Sphere{c, s}).size();
+  }
+  EXPECT_GT(reported, 0u) << name << ": the test must exercise overlaps";
+}
+
+TEST(PackedTree, MatchesExactTreeAndBruteForceOnProceduralMeshes) {
+  for (const auto& [name, mesh] : procedural_meshes()) check_packed(mesh, name, 120);
+}
+
+TEST(PackedTree, MatchesExactTreeAndBruteForceOnRealMeshes) {
+  BOXTREE_REQUIRE_SHARED_MESHES();
+  for (const char* name : {"stanford_bunny_res3.obj", "env.obj", "rob.obj", "bullet_kiva_pod_lowres.obj"})
+    check_packed(load_shared_mesh(name), name, 80);
+}
+
+TEST(PackedTree, FlatAndFarMeshes) {
+  // A flat sheet (zero height extent: the grid's z step must stay usable) and the same far away.
+  TriangleMesh flat = make_terrain(20, 20, 1);
+  for (Vec3& v : flat.vertices) v.z() = 0.25;
+  check_packed(flat, "flat", 150);
+  TriangleMesh far = flat;
+  for (Vec3& v : far.vertices) v += Vec3(1e6, -2e6, 3e5);
+  check_packed(far, "flat far", 150);
+}
+
+TEST(PackedTree, WatertightRays) {
+  for (const TriangleMesh& mesh : {make_uv_sphere(40, 20), make_bumpy_sphere(30, 15, 0.1, 3)})
+    check_watertight_tree(PackedAabbTree(build_tree<Aabb>(mesh)), Vec3::Zero(), "sphere", 3000);
+  const TriangleMesh terrain_box = make_closed_terrain(12, 5);
+  check_watertight_tree(PackedAabbTree(build_tree<Aabb>(terrain_box)), inside_point(terrain_box), "closed terrain",
+                        2000);
+}
+
+TEST(PackedTree, CollideMatchesBruteForce) {
+  const PackedAabbTree a(build_tree<Aabb>(make_bumpy_sphere(24, 12, 0.3, 7)));
+  const PackedAabbTree b(build_tree<Aabb>(make_uv_sphere(16, 8, 0.8)));
+  EXPECT_GT(check_collide(a, b, 12, 0.8, "spheres"), 0u);
+  const PackedAabbTree soup(build_tree<Aabb>(make_triangle_soup(400, 3, 1.0, 0.15)));
+  EXPECT_GT(check_collide(soup, a, 8, 0.5, "soup vs sphere"), 0u);
+}
+
+TEST(PackedTree, UnboundedAndBadQueries) {
+  const TriangleMesh mesh = make_terrain(16, 16, 2);
+  const PackedAabbTree packed(build_tree<Aabb>(mesh));
+  const Real inf = std::numeric_limits<Real>::infinity();
+  // An infinite box holds every facet; a box around nothing, none.
+  EXPECT_EQ(query_overlap(packed, Aabb{Vec3::Constant(-inf), Vec3::Constant(inf)}).size(), mesh.facet_count());
+  Aabb half_space{Vec3(-inf, -inf, -inf), Vec3(inf, inf, inf)};
+  half_space.max.x() = mesh_bounds(mesh).center().x();
+  EXPECT_EQ(query_overlap(packed, half_space), brute_overlap(mesh, half_space));
+  EXPECT_TRUE(query_overlap(packed, Aabb{Vec3::Constant(100), Vec3::Constant(101)}).empty());
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_TRUE(query_overlap(packed, Aabb{Vec3(nan, 0, 0), Vec3(1, 1, 1)}).empty());
+  EXPECT_TRUE(query_overlap(packed, Sphere{Vec3(nan, 0, 0), 1}).empty());
+  Ray bad;
+  bad.origin = Vec3(nan, 0, 0);
+  EXPECT_FALSE(ray_closest_hit(packed, bad).has_value());
+  // ray_candidates stops when the visitor returns a t below t_min.
+  Ray down{mesh_bounds(mesh).center() + Vec3(0, 0, 10), Vec3(0, 0, -1)};
+  int visited = 0;
+  ray_candidates(packed, down, [&](FacetId, Real) {
+    ++visited;
+    return Real(-1);
+  });
+  EXPECT_EQ(visited, 1);
+}
+
+TEST(PackedTree, AnyTreeHoldsThePackedFormForAabb) {
+  auto mesh = std::make_shared<const TriangleMesh>(make_bumpy_sphere(30, 15, 0.2, 4));
+  const AnyTree any = AnyTree::build(mesh, parse_method("aabb"));
+  ASSERT_NE(any.packed(), nullptr);
+  EXPECT_EQ(any.get<Aabb>(), nullptr);
+  EXPECT_LE(any.memory_bytes(), 32 * mesh->facet_count());
+  EXPECT_EQ(any.node_count(), any.packed()->node_count());
+  const Sphere s{Vec3(0.5, 0.2, 0.8), 0.4};
+  std::vector<FacetId> got;
+  any.query_overlap(s, [&](FacetId f) {
+    got.push_back(f);
+    return true;
+  });
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, brute_overlap(*mesh, s));
+  EXPECT_FALSE(got.empty());
+  // Oriented methods keep their exact trees.
+  EXPECT_EQ(AnyTree::build(mesh, parse_method("obb-min")).packed(), nullptr);
+}
+
+}  // namespace
+}  // namespace boxtree
