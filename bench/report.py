@@ -20,7 +20,7 @@ import subprocess
 import sys
 from collections import defaultdict
 
-SECTIONS = ["simulation", "mesh_vs_mesh", "rays", "build_memory"]
+SECTIONS = ["simulation", "mesh_vs_mesh", "rays", "box_queries", "build_memory"]
 KEYS = ["section", "case", "metric", "boxtree_method", "boxtree", "peer", "peer_value", "ratio"]
 
 
@@ -105,7 +105,7 @@ def machine(seconds):
             f"- Compiler: {compiler}; Release build (`-O3 -DNDEBUG`), single thread everywhere\n"
             f"- Run: {when}")
     if seconds is not None:
-        text += f", {int(seconds) // 60} min {int(seconds) % 60} s for all four sections"
+        text += f", {int(seconds) // 60} min {int(seconds) % 60} s for all sections"
     return text + "\n"
 
 

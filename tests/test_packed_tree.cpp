@@ -77,6 +77,10 @@ void expect_valid_packing(const Tree<Aabb>& tree, const PackedAabbTree& packed, 
       }
       const Aabb exact = box_of_link(link);
       const Aabb box = packed.child_box(node, slot);
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_GE(node.min[i][slot], 1) << name << ": boxes lie in [1, 65534] on the grid";
+        EXPECT_LE(node.max[i][slot], 0xFFFE) << name << ": boxes lie in [1, 65534] on the grid";
+      }
       EXPECT_TRUE((box.min.array() <= (exact.min - spare).array()).all() &&
                   (box.max.array() >= (exact.max + spare).array()).all())
           << name << ": packed box must hold the facets below it with a step to spare";
@@ -100,7 +104,7 @@ void expect_valid_packing(const Tree<Aabb>& tree, const PackedAabbTree& packed, 
 
 // Exact-triangle queries give brute force's answer; leaf-volume queries report exactly the facets
 // whose packed leaf box meets the shape (for an Aabb query, tested on the grid: also those within
-// one grid step of it), so always a superset of the exact tree's leaf-volume answer.
+// two grid steps of it), so always a superset of the exact tree's leaf-volume answer.
 template <class Shape>
 void expect_overlaps(const Tree<Aabb>& tree, const PackedAabbTree& packed,
                      const std::map<FacetId, std::pair<long, int>>& slots, const Shape& shape, const std::string& what) {
@@ -117,9 +121,9 @@ void expect_overlaps(const Tree<Aabb>& tree, const PackedAabbTree& packed,
     EXPECT_TRUE(std::includes(got.begin(), got.end(), expected.begin(), expected.end())) << what;
     for (FacetId f : got) {
       Aabb box = packed_leaf_box(packed, slots.at(f));
-      box.min -= packed.step() * 1.001;
-      box.max += packed.step() * 1.001;
-      EXPECT_TRUE(overlaps(box, shape)) << what << ": facet " << f << " is farther than a grid step";
+      box.min -= packed.step() * 2.001;
+      box.max += packed.step() * 2.001;
+      EXPECT_TRUE(overlaps(box, shape)) << what << ": facet " << f << " is farther than two grid steps";
     }
   } else {
     EXPECT_EQ(got, expected) << what;

@@ -39,14 +39,15 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
   height_ = 0;
   bounds_ = tree.volume(tree.root());
 
-  // The grid spans the bounds plus kSpareSteps + 1 steps on each side, so that every box can be
-  // rounded outward by kSpareSteps and still fit in 16 bits. A flat axis (a planar terrain's
+  // The grid spans the bounds plus kSpareSteps + 2 steps on each side, so that every box,
+  // rounded outward by kSpareSteps, lies in [1, 65534]: an empty slot's box (min 65535, max 0)
+  // then misses every query box clamped to that range. A flat axis (a planar terrain's
   // height) gets a tiny but non-zero step, relative to the mesh's size and position, so that
   // the grid stays invertible; its boxes are then exact to that step.
   const Vec3 extent = bounds_.extent();
   const Real magnitude = std::max(bounds_.min.cwiseAbs().maxCoeff(), bounds_.max.cwiseAbs().maxCoeff());
   const Real floor_extent = std::max({extent.maxCoeff() * Real(1e-9), magnitude * Real(1e-12), Real(1e-30)});
-  constexpr int kMargin = kSpareSteps + 1;
+  constexpr int kMargin = kSpareSteps + 2;
   for (int i = 0; i < 3; ++i) {
     const Real span = std::max(extent[i], floor_extent);
     step_[i] = span / (kMaxQ - 2 * kMargin);
@@ -199,7 +200,8 @@ struct GridBox {
 #endif
 };
 
-// Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c);
+// Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c; never
+// set for an empty slot);
 // `leaf(facet)` returns false to stop. The caller has tested the root's volume (the exact bounds).
 template <class ChildMask, class Leaf>
 void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, QueryStats& stats) {
@@ -216,15 +218,14 @@ void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, Query
   for (;;) {
     const PackedAabbTree::Node& node = nodes[current];
     stats.volume_tests += kWidth;
-    unsigned mask = child_mask(node);
+    unsigned mask = child_mask(node);  // never has an empty slot's bit
+    stats.nodes_visited += unsigned(__builtin_popcount(mask));
     // Leaves are handled at once; of the inner children, descend into the first, keep the rest.
     bool descend = false;
     while (mask != 0) {
       const int slot = __builtin_ctz(mask);
       mask &= mask - 1;
       const std::uint32_t link = node.link[slot];
-      if (link == PackedAabbTree::kEmpty) continue;
-      ++stats.nodes_visited;
       if (PackedAabbTree::is_leaf(link)) {
         if (!leaf(PackedAabbTree::facet(link))) return;
       } else if (!descend) {
@@ -466,10 +467,15 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
   if constexpr (std::is_same_v<Shape, Aabb>) {
     // The query box on the grid, clamped to the bounds first (an infinite side is fine), so
     // that every node test is six integer compares.
+    // One step more outward instead of quantize_down/up's exact rounding: the multiply's error
+    // is far below a step, and this is per query.
     GridBox grid;
     for (int i = 0; i < 3; ++i) {
-      grid.min[i] = tree.quantize_down(std::max(shape.min[i], tree.bounds().min[i]), i);
-      grid.max[i] = tree.quantize_up(std::min(shape.max[i], tree.bounds().max[i]), i);
+      const Real lo = (std::max(shape.min[i], tree.bounds().min[i]) - tree.origin()[i]) * tree.inv_step()[i];
+      const Real hi = (std::min(shape.max[i], tree.bounds().max[i]) - tree.origin()[i]) * tree.inv_step()[i];
+      // Within [1, 65534], where every packed box lies, so that empty slots never match.
+      grid.min[i] = std::uint16_t(std::clamp(std::floor(lo) - 1, Real(1), Real(0xFFFE)));
+      grid.max[i] = std::uint16_t(std::clamp(std::ceil(hi) + 1, Real(1), Real(0xFFFE)));
     }
     grid.prepare();
     walk(

@@ -13,10 +13,11 @@
 // of the source tree: the bottom-up pairing is kept, only read two levels at a time.
 //
 // Conservative, never exact: each packed box contains the exact one with at least one
-// quantization step (the mesh's extent / 65,527 on that axis) to spare on every side, so
+// quantization step (the mesh's extent / 65,529 on that axis) to spare on every side, so
 // rounding in the queries never culls a facet. Queries that test triangles exactly give exactly
 // Tree<Aabb>'s results; FacetTest::leaf_volume reports a superset of Tree<Aabb>'s (the facets
-// whose packed leaf box meets the shape).
+// whose packed leaf box meets the shape; for an Aabb shape, which is tested on the grid, also
+// those within two steps of it).
 //
 // Immutable after construction; every query is const and safe from many threads.
 #include <cstdint>
@@ -78,6 +79,7 @@ class PackedAabbTree {
   // The quantization: coordinate x on axis i is origin[i] + q * step[i], q in [0, 65535].
   const Vec3& origin() const { return origin_; }
   const Vec3& step() const { return step_; }
+  const Vec3& inv_step() const { return inv_step_; }
   // Largest q with value(q) <= x, and smallest q with value(q) >= x, clamped to [0, 65535].
   std::uint16_t quantize_down(Real x, int axis) const;
   std::uint16_t quantize_up(Real x, int axis) const;
