@@ -101,7 +101,11 @@ class BulletSimulation final : public Simulation {
     btCollisionShape* terrain_shape = nullptr;
     if (boxtree_) {
 #if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
-      terrain_shape = own(new boxtree::bullet::BoxtreeMeshShape(scene.terrain, options.method));
+      auto* shape = new boxtree::bullet::BoxtreeMeshShape(scene.terrain, options.method);
+      // A terrain has a front: a body pressed past a facet's plane by the pile above it is pushed
+      // back up, not through (two-sided, such a body falls through: see mesh_shape.h).
+      shape->setTwoSided(false);
+      terrain_shape = own(shape);
 #endif
     } else {
       mesh_data_.push_back(std::make_unique<BulletMeshData>(*scene.terrain));

@@ -140,6 +140,42 @@ TEST(BulletReliability, OddTerrainGivesNoNanAndNoFallThrough) {
   EXPECT_LE(off, int(scene.bodies.size()) / 8) << "most bodies stay on the terrain";
 }
 
+// A body whose centre was pressed just behind a flat terrain (as a deep pile does): a two-sided
+// mesh pushes it on down, through the floor (the shorter way out); a one-sided mesh pushes it
+// back up. For each shape: a box, a sphere and a capsule (the core's analytic contacts) and a
+// cylinder (Bullet's per-triangle GJK, corrected by the adapter). No gravity: only the contact moves it.
+TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
+  TriangleMesh flat = make_terrain(8, 8, 1, 8, 0);  // 8 x 8 m, flat at z = 0, wound up
+  BulletMesh bullet_mesh(flat);
+  const auto make_body_shape = [](int kind) -> std::unique_ptr<btCollisionShape> {
+    switch (kind) {
+      case 0: return std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.5f));
+      case 1: return std::make_unique<btSphereShape>(0.5f);
+      case 2: return std::make_unique<btCapsuleShapeZ>(0.3f, 0.4f);
+      default: return std::make_unique<btCylinderShapeZ>(btVector3(0.5f, 0.5f, 0.5f));
+    }
+  };
+  for (int kind = 0; kind < 4; ++kind) {
+    for (const bool two_sided : {true, false}) {
+      World world(true);
+      world.world.setGravity(btVector3(0, 0, 0));
+      auto terrain = std::make_unique<BoxtreeMeshShape>(*bullet_mesh.array);
+      terrain->setTwoSided(two_sided);
+      world.add(std::move(terrain), 0, btVector3(-4, -4, 0));
+      // Centre below the surface, the body's top above it (the capsule's axis wholly below).
+      const btScalar depth = kind == 2 ? -0.25f : -0.15f;
+      btRigidBody* body = world.add(make_body_shape(kind), 1, btVector3(0.1f, 0.2f, depth));
+      for (int i = 0; i < 60; ++i) world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
+      const btScalar z = body->getWorldTransform().getOrigin().z();
+      if (two_sided) {
+        EXPECT_LT(z, depth) << "shape " << kind << ": a two-sided mesh pushes it down (why one-sided exists)";
+      } else {
+        EXPECT_GT(z, 0.3f) << "shape " << kind << ": one-sided, it must come back up through the front";
+      }
+    }
+  }
+}
+
 TEST(BulletReliability, SameSceneTwiceGivesBitIdenticalTransforms) {
   const TriangleMesh terrain = boxtree::test::make_odd_terrain(20, 5, 28, 3);
   OddScene a(terrain), b(terrain);

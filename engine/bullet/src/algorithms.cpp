@@ -58,15 +58,34 @@ struct EdgeCorrectingResult : btManifoldResult {
   btTransform mesh_to_world;
   FacetId facet = 0;
 
+  // One-sided meshes: the convex body (its shape and its transform in the mesh frame), to
+  // measure how far it reaches behind a facet.
+  const btConvexShape* convex = nullptr;
+  btTransform convex_in_mesh;
+
   void addContactPoint(const btVector3& normalOnBInWorld, const btVector3& pointInWorld, btScalar depth) override {
     const std::uint8_t active = mesh->activeEdges()[facet];
+    btVector3 tri[3];
+    mesh->scaledTriangle(facet, tri);
+    const btVector3 front_local = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    const bool back_facing = !mesh->isTwoSided() && front_local.length2() > 0 &&
+                             (mesh_to_world.getBasis().transpose() * normalOnBInWorld).dot(front_local) < 0;
+    if (back_facing) {
+      // GJK pushes the body out through the back of the facet: push it out through the front
+      // instead, by how far its deepest point along the front normal lies behind the facet's
+      // plane (as the core's one-sided contacts do, ContactOptions::two_sided).
+      const btVector3 front = front_local.normalized();
+      const btVector3 deepest = convex_in_mesh(convex->localGetSupportingVertex(-(convex_in_mesh.getBasis().transpose() * front)));
+      const btScalar behind = (tri[0] - deepest).dot(front);
+      if (behind < 0) return;  // apart along the front normal: no contact from this side
+      const btVector3 on_plane = deepest + front * behind;
+      return btManifoldResult::addContactPoint(mesh_to_world.getBasis() * front, mesh_to_world(on_plane), -behind);
+    }
     if (active == 0x7) return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
     ContactPoint c;
     c.depth = -Real(depth);
     c.normal = to_vec(mesh_to_world.getBasis().transpose() * normalOnBInWorld);
     c.position = to_vec(mesh_to_world.invXform(pointInWorld));
-    btVector3 tri[3];
-    mesh->scaledTriangle(facet, tri);
     switch (correct_internal_edge_contact(c, to_vec(tri[0]), to_vec(tri[1]), to_vec(tri[2]), active)) {
       case EdgeContact::keep: return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
       case EdgeContact::discard: return;
@@ -142,6 +161,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     contacts.clear();
     ContactOptions options;
     options.margin = reach;
+    options.two_sided = mesh.isTwoSided();
     const Vec3 center = to_vec(convex_in_mesh.getOrigin());
     const Mat3 basis = to_mat(convex_in_mesh.getBasis());
     const TriangleMesh& m = mesh.mesh();
@@ -213,6 +233,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     corrected.m_closestPointDistanceThreshold = result.m_closestPointDistanceThreshold;
     corrected.mesh = &mesh;
     corrected.mesh_to_world = mesh_wrap->getWorldTransform();
+    corrected.convex = &convex;
+    corrected.convex_in_mesh = convex_in_mesh;
 
     auto visit = [&](FacetId f) {
       mesh.countNarrowphaseTriangles(1);

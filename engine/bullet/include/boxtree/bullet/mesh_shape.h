@@ -68,6 +68,13 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   // Per facet, which edges are convex creases (boxtree/active_edges.h); contacts on the others
   // get the face normal, so bodies slide over flat and concave edges without bumping.
   const std::vector<std::uint8_t>& activeEdges() const { return m_activeEdges; }
+  // Two-sided (the default, like btBvhTriangleMeshShape) or one-sided facets for the boxtree
+  // algorithms' contacts: one-sided, a body whose centre has been pushed behind a facet (counter-
+  // clockwise winding is the front) is pushed back out through the front, never further in. For
+  // terrains and closed meshes wound outward: under a deep pile, a two-sided terrain lets a
+  // body that was pressed past a facet's plane fall through (boxtree/contact.h, ContactOptions).
+  void setTwoSided(bool twoSided) { m_twoSided = twoSided; }
+  bool isTwoSided() const { return m_twoSided; }
 
   // Counters for benchmarks and tests (not synchronized: read them from one thread).
   struct Counters {
@@ -91,6 +98,7 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   btVector3 m_localScaling{1, 1, 1};
   bool m_unitScaling = true;
   std::vector<std::uint8_t> m_activeEdges;
+  bool m_twoSided = true;
   Aabb m_bounds;                             // unscaled mesh bounds
   btVector3 m_localAabbMin, m_localAabbMax;  // the same, as Bullet vectors
   mutable Counters m_counters;
