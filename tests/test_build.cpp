@@ -6,6 +6,8 @@
 #include "boxtree/build.h"
 #include "boxtree/stats.h"
 #include "boxtree/volume/aabb.h"
+#include "boxtree/volume/obb.h"
+#include "boxtree/volume/pie_slice.h"
 #include "support/meshes.h"
 
 namespace boxtree {
@@ -118,6 +120,52 @@ TEST(Build, LeafSiblingsAreNeighbours) {
   }
   EXPECT_GT(leaf_pairs, m.facet_count() / 3);
   EXPECT_EQ(sharing, leaf_pairs);
+}
+
+// Same shape, node by node: links and leaves equal.
+template <class A, class B>
+void expect_same_topology(const Tree<A>& a, const Tree<B>& b, const std::string& name) {
+  ASSERT_EQ(a.node_count(), b.node_count()) << name;
+  EXPECT_EQ(a.height(), b.height()) << name;
+  for (NodeIndex i = 0; i < a.node_count(); ++i) {
+    ASSERT_EQ(a.is_leaf(i), b.is_leaf(i)) << name << " node " << i;
+    if (a.is_leaf(i))
+      ASSERT_EQ(a.facet(i), b.facet(i)) << name << " node " << i;
+    else
+      ASSERT_EQ(a.first_child(i), b.first_child(i)) << name << " node " << i;
+  }
+}
+
+// PairRanking::bounding_box ranks the oriented kinds' candidates by their bounding boxes, i.e.
+// exactly as the aabb build does: the same tree shape, each parent fitted once to its children.
+// PairRanking::merged_volume (the paper's rule to the letter) gives valid trees of its own shape.
+TEST(Build, PairRankings) {
+  const std::pair<const char*, TriangleMesh> meshes[] = {
+      {"terrain_24x24", make_terrain(24, 24, 3)},
+      {"bumpy_sphere_30x15", make_bumpy_sphere(30, 15, 0.2, 7)},
+      {"soup_500", make_triangle_soup(500, 4, 1.0, 0.05)},
+  };
+  for (const auto& [name, mesh] : meshes) {
+    for (MergeCost cost : {MergeCost::surface_area, MergeCost::volume}) {
+      BuildSettings settings;
+      settings.cost = cost;
+      const Tree<Aabb> boxes = build_tree<Aabb>(mesh, settings);
+      settings.ranking = PairRanking::bounding_box;
+      const Tree<ObbMin> obb = build_tree<ObbMin>(mesh, settings);
+      const Tree<PieMin> pie = build_tree<PieMin>(mesh, settings);
+      expect_same_topology(boxes, obb, name);
+      expect_same_topology(boxes, pie, name);
+      EXPECT_EQ(validate_tree(obb), "") << name;
+      EXPECT_EQ(validate_tree(pie), "") << name;
+      settings.ranking = PairRanking::merged_volume;
+      const Tree<ObbMin> obb_exact = build_tree<ObbMin>(mesh, settings);
+      const Tree<PieMin> pie_exact = build_tree<PieMin>(mesh, settings);
+      EXPECT_EQ(validate_tree(obb_exact), "") << name;
+      EXPECT_EQ(validate_tree(pie_exact), "") << name;
+      EXPECT_LE(obb_exact.height(), guaranteed_height_bound(mesh.facet_count())) << name;
+      EXPECT_LE(pie_exact.height(), guaranteed_height_bound(mesh.facet_count())) << name;
+    }
+  }
 }
 
 TEST(Build, RejectsBadMeshes) {

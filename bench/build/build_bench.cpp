@@ -73,14 +73,20 @@ Measure fastest(int repeats, Build&& build) {
   return best;
 }
 
+// --ranking: "" keeps BuildSettings' default.
+std::string g_ranking;
+
 Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, const std::string& name) {
   const boxtree::Method method = boxtree::parse_method(name);
+  boxtree::BuildSettings settings = boxtree::settings_for(method);
+  if (g_ranking == "merged-volume") settings.ranking = boxtree::PairRanking::merged_volume;
+  if (g_ranking == "bounding-box") settings.ranking = boxtree::PairRanking::bounding_box;
   return boxtree::with_method(method, [&](auto tag) {
     using V = typename decltype(tag)::type;
     Measure m;
     m.engine = "boxtree " + name;
     const auto start = Clock::now();
-    const boxtree::Tree<V> tree = boxtree::build_tree<V>(mesh, boxtree::settings_for(method));
+    const boxtree::Tree<V> tree = boxtree::build_tree<V>(mesh, settings);
     m.seconds = boxtree::bench::seconds_since(start);
     m.bytes = tree.memory_bytes();
     m.nodes = tree.node_count();
@@ -162,8 +168,11 @@ int main(int argc, char** argv) {
   std::string sizes_list;
   std::size_t large_from = 500000;
   std::uint64_t seed = 1;
+  int min_repeats = 1;
   bool skip_peers = false;
+  std::string peers_list = "bullet,fcl,embree";
   app.add_flag("--skip-peers", skip_peers, "build boxtree trees only (for profiling)");
+  app.add_option("--peers", peers_list, "which peers to build: comma-separated subset of bullet,fcl,embree");
   app.add_flag("--quick", quick, "small run for CI: 10k and 100k facets, methods aabb and obb-all");
   app.add_option("--json", json_path, "write the result rows (JSON array) here");
   app.add_option("--markdown", markdown_path, "write the section's markdown fragment here");
@@ -175,10 +184,17 @@ int main(int argc, char** argv) {
   app.add_option("--large-from", large_from, "facet count from which only --large-methods are built");
   app.add_option("--sizes", sizes_list, "comma-separated facet counts (default 10000,100000,1000000,4000000)");
   app.add_option("--seed", seed, "terrain seed");
+  app.add_option("--ranking", g_ranking, "candidate ranking of the oriented kinds (BuildSettings::ranking; default: the library's)")
+      ->check(CLI::IsMember({"merged-volume", "bounding-box"}));
+  app.add_option("--repeats", min_repeats, "build every mesh at least this many times and keep the fastest build");
   CLI11_PARSE(app, argc, argv);
   if (sizes_list.empty()) sizes_list = quick ? "10000,100000" : "10000,100000,1000000,4000000";
   if (quick && app.count("--methods") == 0) methods_list = "aabb,obb-all";
   std::vector<std::string> methods = split(methods_list), large_methods = split(large_methods_list);
+  const std::vector<std::string> peer_names = split(peers_list);
+  const auto peer_wanted = [&](const char* name) {
+    return !skip_peers && std::find(peer_names.begin(), peer_names.end(), name) != peer_names.end();
+  };
   std::vector<std::size_t> sizes;
   try {
     for (const auto& s : split(sizes_list)) sizes.push_back(std::stoull(s));
@@ -200,7 +216,8 @@ int main(int argc, char** argv) {
   md << "## Build time and memory: boxtree vs Bullet, FCL, Embree\n\n" << boxtree::bench::machine_markdown(peers);
   md << "- Meshes: `make_terrain(c, c, " << seed
      << ")` with c = round(sqrt(n / 2)) cells per side (2 c^2 facets). Single-threaded builds; meshes under 50k facets are "
-        "built 3 times and the fastest build is kept.\n"
+        "built 3 times (every mesh at least --repeats times, here "
+     << min_repeats << ") and the fastest build is kept.\n"
         "- Bytes per facet: the hierarchy a user pays for beyond the mesh. boxtree: `Tree::memory_bytes()` (volumes + "
         "4-byte links; the mesh is shared, not copied). Bullet: quantized nodes (16 B) + subtree headers + the leaf-node "
         "array it keeps after the build (`btBvhTriangleMeshShape`, `useQuantizedAabbCompression = true`). FCL: "
@@ -218,7 +235,7 @@ int main(int argc, char** argv) {
     const int cells = std::max(2, int(std::lround(std::sqrt(double(target) / 2))));
     auto mesh = std::make_shared<const boxtree::TriangleMesh>(boxtree::make_terrain(cells, cells, seed));
     const std::size_t facets = mesh->facet_count();
-    const int repeats = facets < 50000 ? 3 : 1;
+    const int repeats = std::max(min_repeats, facets < 50000 ? 3 : 1);
     const std::string case_name = "terrain-" + (target >= 1000000 ? std::to_string(target / 1000000) + "M" : std::to_string(target / 1000) + "k");
     std::vector<Measure> boxtree_runs, peer_runs;
     const auto& these_methods = facets >= large_from ? large_methods : methods;
@@ -226,11 +243,12 @@ int main(int argc, char** argv) {
       boxtree_runs.push_back(fastest(repeats, [&] { return build_boxtree(mesh, m); }));
       std::fflush(stdout);
     }
-    if (!skip_peers) {
-      if (boxtree::peers::bullet_available()) peer_runs.push_back(fastest(repeats, [&] { return build_bullet(*mesh); }));
+    if (peer_wanted("bullet") && boxtree::peers::bullet_available())
+      peer_runs.push_back(fastest(repeats, [&] { return build_bullet(*mesh); }));
+    if (peer_wanted("fcl"))
       for (const auto& bv : fcl_bvs) peer_runs.push_back(fastest(repeats, [&] { return build_fcl(*mesh, bv); }));
-      if (boxtree::peers::embree_available()) peer_runs.push_back(fastest(repeats, [&] { return build_embree(*mesh); }));
-    }
+    if (peer_wanted("embree") && boxtree::peers::embree_available())
+      peer_runs.push_back(fastest(repeats, [&] { return build_embree(*mesh); }));
 
     std::vector<std::vector<std::string>> abs{{"engine", "build s", "us/facet", "bytes", "B/facet", "nodes", "what is counted"}};
     auto add = [&](const Measure& m, const char* kind) {

@@ -1,11 +1,19 @@
 // Bottom-up boxtree construction (paper, Sections 2-3).
 //
-// Round structure:
+// Round structure (m active nodes, positions = their Morton order, renewed every round):
 //   1. candidates = contracted mesh adjacency (facets sharing a vertex, welded by position)
-//                 + "near" pairs: neighbours along a Morton curve of the node centres;
-//   2. each candidate costs the surface area (or volume) of the merged volume;
-//   3. greedy maximal matching, cheapest first (ties broken by node order: deterministic);
+//                 + "near" pairs: the `near_window` neighbours on each side along the Morton curve
+//                 of the node centres;
+//   2. each candidate's key: the surface area (or volume) of the merged volume (for the oriented
+//      kinds with PairRanking::bounding_box, of the merged bounding box), computed once per pair;
+//   3. greedy maximal matching, cheapest first (ties broken by the nodes' smallest facet ids:
+//      deterministic), found without sorting (Preis' locally dominant pairs, see greedy_matching);
 //   4. matched pairs become parents, unmatched nodes are carried; adjacency is contracted.
+// Everything per round is linear in the candidates (short per-node lists, radix-sorted Morton
+// codes, buffers reused between rounds), as in PLOC (Meister & Bittner, "Parallel Locally-Ordered
+// Clustering for Bounding Volume Hierarchy Construction", TVCG 2018), which also merges each node
+// with its cheapest neighbour along a Morton order; here the neighbours include the mesh adjacency
+// and the matching is the paper's greedy one.
 // Why the Morton pairs: the Morton order is a path through all active nodes, and a maximal
 // matching on a graph containing a path over all m nodes leaves an independent set of that path
 // unmatched, i.e. at most ceil(m/2) nodes, so each round pairs >= m/4 nodes and the height is at
@@ -15,6 +23,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <numeric>
 #include <optional>
 #include <type_traits>
@@ -28,174 +38,240 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(a) << 32) | b;
-}
+// Lists of neighbours in CSR form: the neighbours of i are items[offsets[i] .. offsets[i + 1]),
+// sorted increasing, without duplicates or i itself.
+struct Adjacency {
+  std::vector<std::uint32_t> offsets;
+  std::vector<std::uint32_t> items;
+};
 
-void sort_unique(std::vector<std::uint64_t>& keys) {
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-}
-
-// Facet pairs that share a vertex position (welding bit-identical coordinates, so triangle soups
-// such as PQP's env.obj still get their adjacency). A vertex shared by more than `max_fan`
-// facets links them in a chain instead of all pairs, bounding the work at high-valence vertices.
-std::vector<std::uint64_t> facet_adjacency(const TriangleMesh& mesh, int max_fan) {
-  const std::size_t vertex_count = mesh.vertices.size();
-  std::vector<VertexId> order(vertex_count);
-  std::iota(order.begin(), order.end(), VertexId{0});
-  auto less_xyz = [&](VertexId a, VertexId b) {
-    const Vec3& p = mesh.vertices[a];
-    const Vec3& q = mesh.vertices[b];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
-  };
-  std::sort(order.begin(), order.end(), less_xyz);
-  std::vector<VertexId> welded(vertex_count);
-  VertexId next = 0;
-  for (std::size_t i = 0; i < vertex_count; ++i) {
-    if (i > 0 && mesh.vertices[order[i]] != mesh.vertices[order[i - 1]]) ++next;
-    welded[order[i]] = next;
+// Sorts [begin, end) and drops duplicates and `self`; returns the new end. The lists are short
+// (a dozen entries on meshes), where insertion sort beats std::sort.
+std::uint32_t* sort_unique_list(std::uint32_t* begin, std::uint32_t* end, std::uint32_t self) {
+  if (end - begin > 48) {
+    std::sort(begin, end);
+  } else {
+    for (std::uint32_t* i = begin + 1; i < end; ++i) {
+      const std::uint32_t x = *i;
+      std::uint32_t* j = i;
+      for (; j > begin && *(j - 1) > x; --j) *j = *(j - 1);
+      *j = x;
+    }
   }
-  const std::size_t welded_count = vertex_count == 0 ? 0 : std::size_t(next) + 1;
+  std::uint32_t* out = begin;
+  for (std::uint32_t* i = begin; i < end; ++i)
+    if (*i != self && (out == begin || *(out - 1) != *i)) *out++ = *i;
+  return out;
+}
+
+// Welded vertex ids: bit-identical positions (and 0 / -0) share an id, numbered in order of
+// first use; an open-addressing hash over the coordinates' bits.
+std::vector<VertexId> weld_vertices(const TriangleMesh& mesh) {
+  const std::size_t count = mesh.vertices.size();
+  std::size_t capacity = 16;
+  while (capacity < 2 * count) capacity *= 2;
+  std::vector<std::uint32_t> table(capacity, kNone);  // welded id + 1's representative vertex
+  std::vector<VertexId> welded(count);
+  std::vector<VertexId> representative;
+  representative.reserve(count);
+  const auto bits = [](Real x) {
+    std::uint64_t b;
+    const Real y = x + Real(0);  // -0 -> +0
+    std::memcpy(&b, &y, sizeof b);
+    return b;
+  };
+  for (std::size_t v = 0; v < count; ++v) {
+    const Vec3& p = mesh.vertices[v];
+    std::uint64_t h = bits(p.x()) * 0x9e3779b97f4a7c15ULL;
+    h = (h ^ (h >> 29) ^ bits(p.y())) * 0xbf58476d1ce4e5b9ULL;
+    h = (h ^ (h >> 31) ^ bits(p.z())) * 0x94d049bb133111ebULL;
+    h ^= h >> 32;
+    std::size_t slot = std::size_t(h) & (capacity - 1);
+    while (true) {
+      const std::uint32_t id = table[slot];
+      if (id == kNone) {
+        table[slot] = std::uint32_t(representative.size());
+        welded[v] = VertexId(representative.size());
+        representative.push_back(VertexId(v));
+        break;
+      }
+      if (mesh.vertices[representative[id]] == p) {
+        welded[v] = id;
+        break;
+      }
+      slot = (slot + 1) & (capacity - 1);
+    }
+  }
+  return welded;
+}
+
+// Facets that share a vertex position (welding bit-identical coordinates, so triangle soups such
+// as PQP's env.obj still get their adjacency), as lists between positions: facet f is at
+// position[f]. A vertex shared by more than `max_fan` facets links them in a chain (in facet
+// order) instead of all pairs, bounding the work at high-valence vertices.
+Adjacency facet_adjacency(const TriangleMesh& mesh, int max_fan, const std::vector<std::uint32_t>& position) {
+  const std::size_t n = mesh.triangles.size();
+  const std::vector<VertexId> welded = weld_vertices(mesh);
+  std::size_t welded_count = 0;
+  for (VertexId w : welded) welded_count = std::max(welded_count, std::size_t(w) + 1);
+  const auto corners = [&](FacetId f, std::array<VertexId, 3>& out) {
+    // A facet repeating a vertex lists it once.
+    int k = 0;
+    for (int i = 0; i < 3; ++i) {
+      const VertexId w = welded[mesh.triangles[f][i]];
+      if ((k > 0 && out[0] == w) || (k > 1 && out[1] == w)) continue;
+      out[k++] = w;
+    }
+    return k;
+  };
 
   // Incident facets per welded vertex (CSR), facets in increasing id order.
   std::vector<std::uint32_t> offsets(welded_count + 1, 0);
-  for (const Triangle& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      // A facet repeating a vertex lists it once.
-      const VertexId w = welded[t[k]];
-      if ((k > 0 && welded[t[0]] == w) || (k > 1 && welded[t[1]] == w)) continue;
-      ++offsets[w + 1];
-    }
+  std::array<VertexId, 3> c;
+  for (FacetId f = 0; f < n; ++f)
+    for (int k = 0, count = corners(f, c); k < count; ++k) ++offsets[c[k] + 1];
   std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
   std::vector<FacetId> incident(offsets.back());
-  std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-  for (FacetId f = 0; f < mesh.triangles.size(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    for (int k = 0; k < 3; ++k) {
-      const VertexId w = welded[t[k]];
-      if ((k > 0 && welded[t[0]] == w) || (k > 1 && welded[t[1]] == w)) continue;
-      incident[cursor[w]++] = f;
-    }
+  {
+    std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (FacetId f = 0; f < n; ++f)
+      for (int k = 0, count = corners(f, c); k < count; ++k) incident[cursor[c[k]]++] = f;
   }
 
-  std::vector<std::uint64_t> edges;
-  edges.reserve(mesh.triangles.size() * 8);
-  for (std::size_t w = 0; w < welded_count; ++w) {
-    const std::uint32_t begin = offsets[w];
-    const std::uint32_t end = offsets[w + 1];
-    const std::uint32_t fan = end - begin;
-    if (fan <= std::uint32_t(max_fan)) {
-      for (std::uint32_t i = begin; i < end; ++i)
-        for (std::uint32_t j = i + 1; j < end; ++j) edges.push_back(edge_key(incident[i], incident[j]));
-    } else {
-      for (std::uint32_t i = begin; i + 1 < end; ++i) edges.push_back(edge_key(incident[i], incident[i + 1]));
+  // Per position: the positions of the facets in its vertices' fans (or its chain neighbours).
+  std::vector<FacetId> facet_at(n);
+  for (FacetId f = 0; f < n; ++f) facet_at[position[f]] = f;
+  std::size_t bound = 0;
+  for (FacetId f = 0; f < n; ++f)
+    for (int k = 0, count = corners(f, c); k < count; ++k) bound += std::min<std::size_t>(offsets[c[k] + 1] - offsets[c[k]], 2 + std::size_t(max_fan));
+  Adjacency adj;
+  adj.offsets.resize(n + 1);
+  adj.items.resize(bound);
+  std::vector<std::uint32_t> stamp(n, kNone);
+  std::uint32_t* out = adj.items.data();
+  for (std::uint32_t p = 0; p < n; ++p) {
+    const FacetId f = facet_at[p];
+    std::uint32_t* begin = out;
+    adj.offsets[p] = std::uint32_t(begin - adj.items.data());
+    stamp[p] = p;
+    const auto add = [&](FacetId g) {
+      const std::uint32_t q = position[g];
+      if (stamp[q] == p) return;
+      stamp[q] = p;
+      *out++ = q;
+    };
+    for (int k = 0, count = corners(f, c); k < count; ++k) {
+      const std::uint32_t vb = offsets[c[k]], ve = offsets[c[k] + 1];
+      if (ve - vb <= std::uint32_t(max_fan)) {
+        for (std::uint32_t i = vb; i < ve; ++i) add(incident[i]);
+      } else {
+        const std::uint32_t i = std::uint32_t(std::lower_bound(incident.begin() + vb, incident.begin() + ve, f) - incident.begin());
+        if (i > vb) add(incident[i - 1]);
+        if (i + 1 < ve) add(incident[i + 1]);
+      }
     }
+    out = sort_unique_list(begin, out, p);
   }
-  sort_unique(edges);
-  return edges;
+  adj.items.resize(std::size_t(out - adj.items.data()));
+  adj.offsets[n] = std::uint32_t(adj.items.size());
+  return adj;
 }
 
-// 63-bit Morton code of a point quantized to 21 bits per axis inside [lo, hi].
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
+// 30-bit Morton code of a point quantized to 10 bits per axis inside [lo, lo + 1024 / scale].
+std::uint32_t spread_bits(std::uint32_t x) {
+  x &= 0x3ff;
+  x = (x | x << 16) & 0x030000ffu;
+  x = (x | x << 8) & 0x0300f00fu;
+  x = (x | x << 4) & 0x030c30c3u;
+  x = (x | x << 2) & 0x09249249u;
   return x;
 }
 
-std::uint64_t morton_code(const Vec3& p, const Vec3& lo, const Vec3& scale) {
-  std::uint64_t code = 0;
+std::uint32_t morton_code(const Vec3& p, const Vec3& lo, const Vec3& scale) {
+  std::uint32_t code = 0;
   for (int i = 0; i < 3; ++i) {
-    const Real q = std::clamp((p[i] - lo[i]) * scale[i], Real(0), Real(0x1fffff));
-    code |= spread_bits(std::uint64_t(q)) << i;
+    const Real q = std::clamp((p[i] - lo[i]) * scale[i], Real(0), Real(0x3ff));
+    code |= spread_bits(std::uint32_t(q)) << i;
   }
   return code;
 }
 
-struct Candidate {
-  Real cost;
-  Real tie;  // secondary cost: surface area when the primary is volume (flat volumes tie at 0)
-  std::uint32_t a, b;
-  bool operator<(const Candidate& o) const {
-    if (cost != o.cost) return cost < o.cost;
-    if (tie != o.tie) return tie < o.tie;
-    if (a != o.a) return a < o.a;
-    return b < o.b;
+// Stable LSD radix sort of (code, index) by code, 10 bits per pass: the Morton order with ties
+// left in their previous order.
+void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& keys,
+                std::vector<std::pair<std::uint32_t, std::uint32_t>>& scratch) {
+  scratch.resize(keys.size());
+  for (int shift = 0; shift < 30; shift += 10) {
+    std::array<std::uint32_t, 1025> count{};
+    for (const auto& k : keys) ++count[((k.first >> shift) & 0x3ff) + 1];
+    for (int b = 0; b < 1024; ++b) count[b + 1] += count[b];
+    for (const auto& k : keys) scratch[count[(k.first >> shift) & 0x3ff]++] = k;
+    keys.swap(scratch);
   }
+}
+
+// The rank of a candidate pair: its cost, then (volume cost only) its surface area, as flat
+// volumes tie at volume 0. Pairs of equal keys are ordered by their node positions.
+struct Key {
+  float cost;
+  float tie;
+  bool operator<(const Key& o) const { return cost < o.cost || (cost == o.cost && tie < o.tie); }
+  bool operator==(const Key& o) const { return cost == o.cost && tie == o.tie; }
+};
+
+// One round's candidate graph: for node position u, slots [offsets[u], offsets[u + 1]) hold its
+// candidate partners (sorted increasing) and the pair's key, the same key in both nodes' slots.
+struct Candidates {
+  std::vector<std::uint32_t> offsets;
+  std::vector<std::uint32_t> neighbor;
+  std::vector<Key> key;
+  std::vector<std::uint32_t> reverse;  // fill cursor for the lower half of each list
 };
 
 // The greedy matching (take candidates cheapest first, skip those touching a matched node)
-// without sorting all candidates: with a strict total order on candidates, greedy equals
-// repeatedly matching "locally dominant" pairs, each the cheapest remaining candidate of both
-// its nodes (Preis, STACS 1999). Each node's list is sorted (short lists) and scanned with a
-// cursor; a node whose best partner prefers someone else defers to that partner first, so
-// chains follow strictly decreasing costs and end in a mutual pair. O(E log degree) instead of
-// O(E log E), and the same result as the global sort.
-struct Matcher {
-  struct Slot {
-    std::uint32_t neighbor;
-    std::uint32_t candidate;  // index into the candidate list
-  };
-  std::vector<std::uint32_t> offsets;
-  std::vector<Slot> slots;
-  std::vector<std::uint32_t> cursor;
-  std::vector<std::uint32_t> stack;
-};
-
-void greedy_matching(const std::vector<Candidate>& candidates, std::size_t m, std::vector<std::uint32_t>& partner,
-                     Matcher& w) {
-  w.offsets.assign(m + 1, 0);
-  for (const Candidate& c : candidates) {
-    ++w.offsets[c.a + 1];
-    ++w.offsets[c.b + 1];
-  }
-  std::partial_sum(w.offsets.begin(), w.offsets.end(), w.offsets.begin());
-  w.slots.resize(w.offsets.back());
-  w.cursor.assign(w.offsets.begin(), w.offsets.end() - 1);
-  for (std::uint32_t i = 0; i < candidates.size(); ++i) {
-    const Candidate& c = candidates[i];
-    w.slots[w.cursor[c.a]++] = {c.b, i};
-    w.slots[w.cursor[c.b]++] = {c.a, i};
-  }
-  for (std::size_t u = 0; u < m; ++u) {
-    std::sort(w.slots.begin() + w.offsets[u], w.slots.begin() + w.offsets[u + 1],
-              [&](const Matcher::Slot& x, const Matcher::Slot& y) { return candidates[x.candidate] < candidates[y.candidate]; });
-    w.cursor[u] = w.offsets[u];
-  }
+// without sorting any candidates: with a strict total order on candidates (key, then the pair of
+// positions), greedy equals repeatedly matching "locally dominant" pairs, each the cheapest
+// remaining candidate of both its nodes (Preis, STACS 1999). A node's best remaining partner is
+// found by a scan of its list and kept until that partner is matched; a node whose best partner
+// prefers someone else defers to that partner first, so chains follow strictly decreasing keys
+// and end in a mutual pair. The same result as the global sort, in O(E) scans on meshes.
+void greedy_matching(const Candidates& c, const std::vector<std::uint32_t>& order, std::size_t m,
+                     std::vector<std::uint32_t>& partner, std::vector<std::uint32_t>& best_slot,
+                     std::vector<std::uint32_t>& stack) {
   partner.assign(m, kNone);
-  // The best remaining partner of u, or kNone.
+  best_slot.assign(m, kNone);
+  // The best remaining partner of u, or kNone. Pairs of equal keys are ordered by their nodes'
+  // `order` (smaller, then larger), i.e. for a fixed u by the partner's order.
   auto best = [&](std::uint32_t u) {
-    std::uint32_t& c = w.cursor[u];
-    while (c < w.offsets[u + 1] && partner[w.slots[c].neighbor] != kNone) ++c;
-    return c < w.offsets[u + 1] ? w.slots[c].neighbor : kNone;
+    std::uint32_t s = best_slot[u];
+    if (s != kNone && partner[c.neighbor[s]] == kNone) return c.neighbor[s];
+    s = kNone;
+    for (std::uint32_t i = c.offsets[u], end = c.offsets[u + 1]; i < end; ++i) {
+      if (partner[c.neighbor[i]] != kNone) continue;
+      if (s == kNone || c.key[i] < c.key[s] || (c.key[i] == c.key[s] && order[c.neighbor[i]] < order[c.neighbor[s]])) s = i;
+    }
+    best_slot[u] = s;
+    return s == kNone ? kNone : c.neighbor[s];
   };
-  w.stack.clear();
-  for (std::size_t u = m; u-- > 0;) w.stack.push_back(std::uint32_t(u));
-  while (!w.stack.empty()) {
-    const std::uint32_t u = w.stack.back();
+  stack.clear();
+  for (std::size_t u = m; u-- > 0;) stack.push_back(std::uint32_t(u));
+  while (!stack.empty()) {
+    const std::uint32_t u = stack.back();
     if (partner[u] != kNone) {
-      w.stack.pop_back();
+      stack.pop_back();
       continue;
     }
     const std::uint32_t v = best(u);
     if (v == kNone) {
-      w.stack.pop_back();
+      stack.pop_back();
       continue;
     }
     if (best(v) == u) {
-      w.stack.pop_back();
+      stack.pop_back();
       partner[u] = v;
       partner[v] = u;
     } else {
-      w.stack.push_back(v);  // v prefers a cheaper pair: settle v first, then come back to u
+      stack.push_back(v);  // v prefers a cheaper pair: settle v first, then come back to u
     }
   }
 }
@@ -309,104 +385,256 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   if (settings.near_window < 1) throw Error("build_tree: near_window must be at least 1");
   if (settings.max_neighbors < 2) throw Error("build_tree: max_neighbors must be at least 2");
 
-  // Build-order storage: leaves are 0..n-1 (node i is facet i); parents are appended.
-  std::vector<Volume> volumes;
+  // Nodes in build order: leaves 0..n-1 (node i is facet i), parents appended, children
+  // first/second. The rounds work on axis-aligned bounding boxes only (for boxes, the volumes
+  // themselves): volumes of another kind are fitted during the rounds only for
+  // PairRanking::merged_volume, which ranks candidates by them; otherwise once per parent, in the
+  // final layout.
+  constexpr bool kIsAabb = std::is_same_v<Volume, Aabb>;
+  const bool fit_during_rounds = !kIsAabb && settings.ranking == PairRanking::merged_volume;
+  std::vector<Volume> volumes;  // by build index, when fit_during_rounds
   std::vector<std::uint32_t> first(n, kNone), second(n, kNone);
-  std::vector<int> heights(n, 0);
-  volumes.reserve(2 * n - 1);
   first.reserve(2 * n - 1);
   second.reserve(2 * n - 1);
-  heights.reserve(2 * n - 1);
-  for (FacetId f = 0; f < n; ++f) volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
-
-  auto cost_of = [&](const Volume& v) -> std::pair<Real, Real> {
-    const Real area = surface_area(v);
-    if (settings.cost == MergeCost::volume) return {volume(v), area};
-    return {area, 0};
-  };
-
-  // Active nodes, by position; adjacency edges are between positions.
-  std::vector<std::uint32_t> active(n);
-  std::iota(active.begin(), active.end(), 0u);
-  std::vector<std::uint64_t> adjacency = facet_adjacency(mesh, settings.max_neighbors);
-
-  BuildStats local;
-  std::vector<Candidate> candidates;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> morton;
-  std::vector<std::uint32_t> partner;
-  Matcher matcher;
-  std::vector<std::uint32_t> new_position;
-  while (active.size() > 1) {
-    const std::size_t m = active.size();
-    ++local.rounds;
-
-    // 1. Candidates: contracted adjacency + Morton neighbours.
-    Aabb centres;
-    for (std::uint32_t node : active) centres.expand(center(volumes[node]));
-    const Vec3 extent = centres.extent();
-    Vec3 scale;
-    for (int i = 0; i < 3; ++i) scale[i] = extent[i] > 0 ? Real(0x1fffff) / extent[i] : 0;
-    morton.resize(m);
-    for (std::uint32_t p = 0; p < m; ++p) morton[p] = {morton_code(center(volumes[active[p]]), centres.min, scale), p};
-    std::sort(morton.begin(), morton.end());
-
-    candidates.clear();
-    candidates.reserve(adjacency.size() + m * settings.near_window);
-    auto add_candidate = [&](std::uint32_t pa, std::uint32_t pb) {
-      if (pa > pb) std::swap(pa, pb);
-      const auto [cost, tie] = cost_of(Volume::enclosing(volumes[active[pa]], volumes[active[pb]]));
-      candidates.push_back({cost, tie, pa, pb});
-    };
-    for (std::uint64_t key : adjacency) add_candidate(std::uint32_t(key >> 32), std::uint32_t(key));
-    for (std::size_t i = 0; i < m; ++i)
-      for (std::size_t j = i + 1; j <= i + std::size_t(settings.near_window) && j < m; ++j)
-        add_candidate(morton[i].second, morton[j].second);
-    local.candidate_pairs += candidates.size();
-
-    // 2-3. Greedy maximal matching, cheapest merged volume first.
-    greedy_matching(candidates, m, partner, matcher);
-
-    // 4. Parents for pairs, carried nodes as they are; positions keep the old order.
-    new_position.assign(m, kNone);
-    std::vector<std::uint32_t> next_active;
-    next_active.reserve(m);
-    for (std::uint32_t p = 0; p < m; ++p) {
-      if (new_position[p] != kNone) continue;
-      const std::uint32_t q = partner[p];
-      new_position[p] = std::uint32_t(next_active.size());
-      if (q == kNone) {
-        next_active.push_back(active[p]);
-        continue;
-      }
-      new_position[q] = new_position[p];
-      const std::uint32_t a = active[p], b = active[q];
-      const std::uint32_t parent = std::uint32_t(volumes.size());
-      volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
-      first.push_back(a);
-      second.push_back(b);
-      heights.push_back(1 + std::max(heights[a], heights[b]));
-      next_active.push_back(parent);
-    }
-    BOXTREE_ASSERT(next_active.size() < m, "a round always pairs at least one node");
-
-    for (std::uint64_t& key : adjacency) {
-      const std::uint32_t a = new_position[std::uint32_t(key >> 32)];
-      const std::uint32_t b = new_position[std::uint32_t(key)];
-      key = a == b ? ~std::uint64_t(0) : edge_key(a, b);
-    }
-    sort_unique(adjacency);
-    if (!adjacency.empty() && adjacency.back() == ~std::uint64_t(0)) adjacency.pop_back();
-    active.swap(next_active);
+  if (fit_during_rounds) {
+    volumes.reserve(2 * n - 1);
+    for (FacetId f = 0; f < n; ++f) volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  }
+  std::vector<Aabb> leaf_boxes(n);
+  Aabb bounds;
+  for (FacetId f = 0; f < n; ++f) {
+    leaf_boxes[f] = Aabb::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+    bounds = Aabb::enclosing(bounds, leaf_boxes[f]);
   }
 
-  // Final layout: depth-first from the root, the two children of a node in adjacent slots.
-  const std::size_t node_count = volumes.size();
+  // Keys are floats, costs divided by the mesh's size (its largest extent squared for areas,
+  // cubed for volumes) to stay in float range; rounding to float keeps the order of costs up to
+  // ties, which the positions break.
+  const bool volume_cost = settings.cost == MergeCost::volume;
+  const Real max_extent = bounds.extent().maxCoeff();
+  const Real inv_extent = max_extent > 0 && std::isfinite(1 / max_extent) ? 1 / max_extent : 1;
+  const Real area_scale = inv_extent * inv_extent;
+  const Real volume_scale = area_scale * inv_extent;
+  const auto make_key = [&](Real area, Real vol) -> Key {
+    if (volume_cost) return {float(vol * volume_scale), float(area * area_scale)};
+    return {float(area * area_scale), 0.0f};
+  };
+
+  // Per position (copied in Morton order each round, so that a node's candidates are near in
+  // memory): the node, its bounding box, its subtree height.
+  std::vector<std::uint32_t> active, next_active;
+  std::vector<Aabb> active_box, next_box;
+  std::vector<int> active_height, next_height;
+  // Tie order: the smallest facet id below the node (as if positions kept the facets' order).
+  std::vector<std::uint32_t> active_order, next_order;
+  // The rank of merging the nodes at positions p < q.
+  const auto pair_key = [&](std::uint32_t p, std::uint32_t q) -> Key {
+    if constexpr (!kIsAabb) {
+      if (fit_during_rounds) {
+        const Volume merged = Volume::enclosing(volumes[active[p]], volumes[active[q]]);
+        return make_key(surface_area(merged), volume_cost ? volume(merged) : 0);
+      }
+    }
+    const Aabb merged = Aabb::enclosing(active_box[p], active_box[q]);
+    return make_key(surface_area(merged), volume_cost ? volume(merged) : 0);
+  };
+
+  BuildStats local;
+  // Positions are the Morton order of the nodes' box centres, renewed every round; the mesh
+  // adjacency (contracted) is kept between positions.
+  // morton[i] = (code, index into boxes) in Morton order of the boxes' centres.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> morton, morton_scratch;
+  const auto morton_order = [&](const Aabb* boxes, std::uint32_t count) {
+    Aabb centres;
+    for (std::uint32_t i = 0; i < count; ++i) centres.expand(boxes[i].center());
+    const Vec3 extent = centres.extent();
+    Vec3 scale;
+    for (int i = 0; i < 3; ++i) scale[i] = extent[i] > 0 ? Real(0x3ff) / extent[i] : 0;
+    morton.resize(count);
+    for (std::uint32_t i = 0; i < count; ++i) morton[i] = {morton_code(boxes[i].center(), centres.min, scale), i};
+    radix_sort(morton, morton_scratch);
+  };
+
+  Adjacency adjacency, next_adjacency;
+  {
+    morton_order(leaf_boxes.data(), std::uint32_t(n));
+    std::vector<std::uint32_t> position(n);
+    active.resize(n);
+    active_box.resize(n);
+    active_height.assign(n, 0);
+    active_order.resize(n);
+    for (std::uint32_t p = 0; p < n; ++p) {
+      active[p] = morton[p].second;
+      active_order[p] = active[p];
+      active_box[p] = leaf_boxes[active[p]];
+      position[morton[p].second] = p;
+    }
+    leaf_boxes = std::vector<Aabb>();
+    adjacency = facet_adjacency(mesh, settings.max_neighbors, position);
+  }
+  Candidates cand;
+  std::vector<std::uint32_t> partner, best_slot, stack, group, group_members, rank, stamp;
+  const std::uint32_t window = std::uint32_t(settings.near_window);
+  std::uint32_t next_node = std::uint32_t(n);
+  while (active.size() > 1) {
+    const std::uint32_t m = std::uint32_t(active.size());
+    ++local.rounds;
+
+    // 1. Candidates of each position: its contracted adjacency and its `window` neighbours on
+    // each side in the Morton order, merged into one sorted list.
+    cand.offsets.resize(m + 1);
+    cand.neighbor.resize(adjacency.items.size() + std::size_t(m) * 2 * window);
+    std::uint32_t write = 0;
+    for (std::uint32_t p = 0; p < m; ++p) {
+      cand.offsets[p] = write;
+      const std::uint32_t* a = adjacency.items.data() + adjacency.offsets[p];
+      const std::uint32_t* a_end = adjacency.items.data() + adjacency.offsets[p + 1];
+      std::uint32_t w = p >= window ? p - window : 0;
+      const std::uint32_t w_end = std::min(m, p + window + 1);
+      std::uint32_t* out = cand.neighbor.data() + write;
+      while (a < a_end || w < w_end) {
+        if (w == p) {
+          ++w;
+          continue;
+        }
+        std::uint32_t x;
+        if (w >= w_end || (a < a_end && *a < w)) {
+          x = *a++;
+        } else {
+          if (a < a_end && *a == w) ++a;
+          x = w++;
+        }
+        *out++ = x;
+      }
+      write = std::uint32_t(out - cand.neighbor.data());
+    }
+    cand.offsets[m] = write;
+    cand.neighbor.resize(write);
+    local.candidate_pairs += write / 2;
+
+    // 2. Each pair's key, computed once (by the node at the smaller position) and stored in both
+    // lists: the lower part of each list is filled in increasing order of the partner.
+    cand.key.resize(write);
+    cand.reverse.assign(cand.offsets.begin(), cand.offsets.end() - 1);
+    for (std::uint32_t p = 0; p < m; ++p) {
+      for (std::uint32_t i = cand.offsets[p], end = cand.offsets[p + 1]; i < end; ++i) {
+        const std::uint32_t q = cand.neighbor[i];
+        if (q < p) continue;
+        const Key key = pair_key(p, q);
+        cand.key[i] = key;
+        const std::uint32_t r = cand.reverse[q]++;
+        BOXTREE_ASSERT(cand.neighbor[r] == p, "candidate lists are symmetric");
+        cand.key[r] = key;
+      }
+    }
+
+    // 3. Greedy maximal matching, cheapest first.
+    greedy_matching(cand, active_order, m, partner, best_slot, stack);
+
+    // 4. Parents for pairs, carried nodes as they are (group g, in the order of their first
+    // position), then the groups in Morton order as the next round's positions.
+    group.assign(m, kNone);
+    group_members.clear();
+    next_active.clear();
+    next_box.clear();
+    next_height.clear();
+    next_order.clear();
+    for (std::uint32_t p = 0; p < m; ++p) {
+      if (group[p] != kNone) continue;
+      const std::uint32_t q = partner[p];
+      const std::uint32_t g = std::uint32_t(next_active.size());
+      group[p] = g;
+      group_members.push_back(p);
+      group_members.push_back(q);
+      if (q == kNone) {
+        next_active.push_back(active[p]);
+        next_box.push_back(active_box[p]);
+        next_height.push_back(active_height[p]);
+        next_order.push_back(active_order[p]);
+        continue;
+      }
+      group[q] = g;
+      const std::uint32_t a = active[p], b = active[q];
+      if (fit_during_rounds) volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
+      first.push_back(a);
+      second.push_back(b);
+      next_active.push_back(next_node++);
+      next_box.push_back(Aabb::enclosing(active_box[p], active_box[q]));
+      next_height.push_back(1 + std::max(active_height[p], active_height[q]));
+      next_order.push_back(std::min(active_order[p], active_order[q]));
+    }
+    const std::uint32_t next_m = std::uint32_t(next_active.size());
+    BOXTREE_ASSERT(next_m < m, "a round always pairs at least one node");
+    if (next_m == 1) {
+      active.swap(next_active);
+      active_height.swap(next_height);
+      break;
+    }
+    morton_order(next_box.data(), next_m);
+    rank.resize(next_m);
+    for (std::uint32_t i = 0; i < next_m; ++i) rank[morton[i].second] = i;
+    for (std::uint32_t p = 0; p < m; ++p) group[p] = rank[group[p]];  // old position -> new position
+    stamp.assign(next_m, kNone);
+
+    // Contracted adjacency: a group's neighbours are its members' neighbours' groups.
+    next_adjacency.offsets.resize(next_m + 1);
+    next_adjacency.items.resize(adjacency.items.size());
+    write = 0;
+    active.resize(next_m);
+    active_box.resize(next_m);
+    active_height.resize(next_m);
+    active_order.resize(next_m);
+    for (std::uint32_t i = 0; i < next_m; ++i) {
+      const std::uint32_t g = morton[i].second;
+      active[i] = next_active[g];
+      active_box[i] = next_box[g];
+      active_height[i] = next_height[g];
+      active_order[i] = next_order[g];
+      next_adjacency.offsets[i] = write;
+      std::uint32_t* begin = next_adjacency.items.data() + write;
+      std::uint32_t* end = begin;
+      stamp[i] = i;  // drops i itself
+      for (int k = 0; k < 2; ++k) {
+        const std::uint32_t p = group_members[2 * g + k];
+        if (p == kNone) break;
+        for (std::uint32_t j = adjacency.offsets[p]; j < adjacency.offsets[p + 1]; ++j) {
+          const std::uint32_t r = group[adjacency.items[j]];
+          if (stamp[r] == i) continue;
+          stamp[r] = i;
+          *end++ = r;
+        }
+      }
+      write = std::uint32_t(sort_unique_list(begin, end, i) - next_adjacency.items.data());
+    }
+    next_adjacency.offsets[next_m] = write;
+    next_adjacency.items.resize(write);
+    std::swap(adjacency, next_adjacency);
+  }
+
+  // Final layout: depth-first from the root, the two children of a node in adjacent slots;
+  // children have larger slots than their parent, so a backward pass fits parents after their
+  // children.
+  const std::size_t node_count = first.size();
   BOXTREE_ASSERT(node_count == 2 * n - 1, "a binary tree over n leaves has 2n-1 nodes");
-  std::vector<Volume> out_volumes;
-  std::vector<std::uint32_t> out_links;
-  detail::depth_first_layout(volumes, first, second, active[0], n, Tree<Volume>::kLeafFlag, out_volumes, out_links);
-  const int height = heights[active[0]];
-  if constexpr (!std::is_same_v<Volume, Aabb> && !is_hybrid_v<Volume>) {
+  const std::uint32_t leaf_flag = Tree<Volume>::kLeafFlag;
+  std::vector<std::uint32_t> out_links, out_nodes;
+  detail::depth_first_order(first, second, active[0], node_count, n, leaf_flag, out_links, out_nodes);
+  std::vector<Volume> out_volumes(node_count);
+  if (fit_during_rounds) {
+    for (std::size_t slot = 0; slot < node_count; ++slot) out_volumes[slot] = volumes[out_nodes[slot]];
+  } else {
+    for (std::size_t slot = node_count; slot-- > 0;) {
+      const std::uint32_t link = out_links[slot];
+      if (link & leaf_flag) {
+        const FacetId f = link & ~leaf_flag;
+        out_volumes[slot] = Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+      } else {
+        out_volumes[slot] = Volume::enclosing(out_volumes[link], out_volumes[link + 1]);
+      }
+    }
+  }
+  const int height = active_height[0];
+  if constexpr (!kIsAabb && !is_hybrid_v<Volume>) {
     if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out_volumes, out_links, settings.cost);
   }
 

@@ -24,18 +24,19 @@ void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2);
 // The builders' final layout (build_tree, planar::build_terrain_tree): nodes in build order
 // (leaves 0..leaf_count-1 are the facets, parents after, children `first`/`second`) laid out
 // depth-first from `root` with the two children of a node in adjacent slots, as Tree expects.
-template <class Volume>
-void depth_first_layout(const std::vector<Volume>& volumes, const std::vector<std::uint32_t>& first,
-                        const std::vector<std::uint32_t>& second, std::uint32_t root, std::size_t leaf_count,
-                        std::uint32_t leaf_flag, std::vector<Volume>& out_volumes, std::vector<std::uint32_t>& out_links) {
-  out_volumes.assign(volumes.size(), Volume{});
-  out_links.assign(volumes.size(), 0);
+// depth_first_order gives the links and, per slot, the node's build index (children always get
+// larger slots than their parent); depth_first_layout also copies the volumes.
+inline void depth_first_order(const std::vector<std::uint32_t>& first, const std::vector<std::uint32_t>& second,
+                              std::uint32_t root, std::size_t node_count, std::size_t leaf_count, std::uint32_t leaf_flag,
+                              std::vector<std::uint32_t>& out_links, std::vector<std::uint32_t>& out_nodes) {
+  out_links.assign(node_count, 0);
+  out_nodes.assign(node_count, 0);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root, 0}};  // (build index, output slot)
   std::uint32_t next_slot = 1;
   while (!stack.empty()) {
     const auto [node, slot] = stack.back();
     stack.pop_back();
-    out_volumes[slot] = volumes[node];
+    out_nodes[slot] = node;
     if (node < leaf_count) {
       out_links[slot] = leaf_flag | node;
       continue;
@@ -45,6 +46,16 @@ void depth_first_layout(const std::vector<Volume>& volumes, const std::vector<st
     stack.push_back({first[node], next_slot});
     next_slot += 2;
   }
+}
+
+template <class Volume>
+void depth_first_layout(const std::vector<Volume>& volumes, const std::vector<std::uint32_t>& first,
+                        const std::vector<std::uint32_t>& second, std::uint32_t root, std::size_t leaf_count,
+                        std::uint32_t leaf_flag, std::vector<Volume>& out_volumes, std::vector<std::uint32_t>& out_links) {
+  std::vector<std::uint32_t> nodes;
+  depth_first_order(first, second, root, volumes.size(), leaf_count, leaf_flag, out_links, nodes);
+  out_volumes.resize(volumes.size());
+  for (std::size_t slot = 0; slot < nodes.size(); ++slot) out_volumes[slot] = volumes[nodes[slot]];
 }
 
 }  // namespace boxtree::detail
