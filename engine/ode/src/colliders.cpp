@@ -179,7 +179,7 @@ int collide_capsule(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, in
       });
 }
 
-// ---- cylinder: GJK/EPA on its support mapping ----
+// ---- cylinder ----
 int collide_cylinder(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
   const GeomObject& object = *object_of(o1);
   const RigidTransform world_from_mesh = pose_of(o1);
@@ -193,12 +193,10 @@ int collide_cylinder(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, i
   query.axes = mesh_from_world.rotation * pose_of(o2).rotation;
   query.half_extents = Vec3(radius, radius, length / 2).array() + object.settings.margin;
   const Real r = radius;
-  auto support = [&](const Vec3& direction) { return support_cylinder(p0, p1, r, direction); };
-  const ConvexSupport shape{support, query.center};
   return collide_convex_shape(
       o1, o2, flags, contact, skip, query, std::hypot(radius, length / 2), world_from_mesh,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* found) {
-        return contact_convex_triangle(shape, a, b, c, o, found);
+        return contact_cylinder_triangle(p0, p1, r, a, b, c, o, found);
       });
 }
 
@@ -224,7 +222,7 @@ int collide_convex(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int
   for (const Vec3& p : points) centroid += p;
   centroid /= Real(points.size());
   auto support = [&](const Vec3& direction) { return support_points(points, direction); };
-  const ConvexSupport shape{support, centroid};
+  const ConvexSupport shape{support, centroid, true};
   return collide_convex_shape(
       o1, o2, flags, contact, skip, query, local.extent().norm() / 2, world_from_mesh,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* found) {
