@@ -137,19 +137,15 @@ void check_packed(const TriangleMesh& mesh, const std::string& name, int queries
   check_rays(packed, queries, 3, name);
   const auto slots = leaf_slots(packed);
   const Aabb box = mesh_bounds(mesh);
-  const double size = box.extent().norm();
   Random r(41);
   std::size_t reported = 0;
   for (int i = 0; i < queries; ++i) {
-    const Vec3 c = random_point_near(r, box);
-    const double s = size * r.uniform(0.001, 0.2);
-    expect_overlaps(tree, packed, slots, Aabb::from_points(c, c + r.uniform_vec3(-s, s)), name + " aabb");
-    Obb obb{c, random_rotation(r), r.uniform_vec3(0, s)};
-    if (i % 7 == 0) obb.half_extents[i % 3] = 0;
-    expect_overlaps(tree, packed, slots, obb, name + " obb");
-    expect_overlaps(tree, packed, slots, Sphere{c, s}, name + " sphere");
-    expect_overlaps(tree, packed, slots, Capsule{c, c + r.unit_vector() * s * 2, s * 0.3}, name + " capsule");
-    reported += query_overlap(packed, Sphere{c, s}).size();
+    const QueryShapes q = random_query_shapes(r, box, i);
+    expect_overlaps(tree, packed, slots, q.aabb, name + " aabb");
+    expect_overlaps(tree, packed, slots, q.obb, name + " obb");
+    expect_overlaps(tree, packed, slots, q.sphere, name + " sphere");
+    expect_overlaps(tree, packed, slots, q.capsule, name + " capsule");
+    reported += query_overlap(packed, q.sphere).size();
   }
   EXPECT_GT(reported, 0u) << name << ": the test must exercise overlaps";
 }

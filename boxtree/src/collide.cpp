@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "boxtree/detail/volume_kinds.h"
+#include "query_internal.h"
 
 namespace boxtree {
 
@@ -44,9 +45,7 @@ void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform&
       const FacetId fa = a.facet(pair.a);
       const FacetId fb = b.facet(pair.b);
       ++local.leaf_tests;
-      if (triangles_intersect(mesh_a.corner(fa, 0), mesh_a.corner(fa, 1), mesh_a.corner(fa, 2),
-                              a_from_b.apply(mesh_b.corner(fb, 0)), a_from_b.apply(mesh_b.corner(fb, 1)),
-                              a_from_b.apply(mesh_b.corner(fb, 2)))) {
+      if (detail::facets_intersect(mesh_a, fa, mesh_b, fb, a_from_b)) {
         if (!visit(FacetPair{fa, fb}) || settings.stop_at_first) stop = true;
       }
       continue;
@@ -72,16 +71,8 @@ void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform&
 template <class Volume>
 std::vector<FacetPair> collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform& a_from_b,
                                QueryStats* stats, const CollideSettings& settings) {
-  std::vector<FacetPair> pairs;
-  collide<Volume>(
-      a, b, a_from_b,
-      [&](const FacetPair& p) {
-        pairs.push_back(p);
-        return true;
-      },
-      stats, settings);
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
+  return detail::collect_sorted<FacetPair>(
+      [&](auto visit) { collide<Volume>(a, b, a_from_b, visit, stats, settings); });
 }
 
 #define BOXTREE_INSTANTIATE_COLLIDE(V)                                                                     \

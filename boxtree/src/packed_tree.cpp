@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "query_internal.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -142,14 +144,7 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
 
 namespace {
 
-struct StatsSink {
-  QueryStats local;
-  QueryStats* out;
-  explicit StatsSink(QueryStats* o) : out(o) {}
-  ~StatsSink() {
-    if (out) *out += local;
-  }
-};
+using detail::StatsSink;
 
 // A query box on the packed grid, rounded outward (so it contains the exact box).
 struct GridBox {
@@ -436,17 +431,8 @@ std::optional<RayHit> ray_any_hit(const PackedAabbTree& tree, const Ray& ray, Qu
 }
 
 std::vector<RayHit> ray_all_hits(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
-  std::vector<RayHit> hits;
-  ray_all_hits(
-      tree, ray,
-      [&](const RayHit& hit) {
-        hits.push_back(hit);
-        return true;
-      },
-      stats);
-  std::sort(hits.begin(), hits.end(),
-            [](const RayHit& x, const RayHit& y) { return x.t != y.t ? x.t < y.t : x.facet < y.facet; });
-  return hits;
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); },
+                                        detail::nearer_hit);
 }
 
 template <class Shape>
@@ -493,16 +479,7 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
 template <class Shape>
 std::vector<FacetId> query_overlap(const PackedAabbTree& tree, const Shape& shape, QueryStats* stats,
                                    FacetTest test) {
-  std::vector<FacetId> facets;
-  query_overlap<Shape>(
-      tree, shape,
-      [&](FacetId f) {
-        facets.push_back(f);
-        return true;
-      },
-      stats, test);
-  std::sort(facets.begin(), facets.end());
-  return facets;
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_overlap<Shape>(tree, shape, visit, stats, test); });
 }
 
 namespace {
@@ -556,9 +533,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
       const FacetId fa = PackedAabbTree::facet(link_a);
       const FacetId fb = PackedAabbTree::facet(link_b);
       ++local.leaf_tests;
-      if (triangles_intersect(mesh_a.corner(fa, 0), mesh_a.corner(fa, 1), mesh_a.corner(fa, 2),
-                              a_from_b.apply(mesh_b.corner(fb, 0)), a_from_b.apply(mesh_b.corner(fb, 1)),
-                              a_from_b.apply(mesh_b.corner(fb, 2)))) {
+      if (detail::facets_intersect(mesh_a, fa, mesh_b, fb, a_from_b)) {
         if (!visit(FacetPair{fa, fb}) || settings.stop_at_first) return;
       }
       continue;
@@ -584,16 +559,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
 
 std::vector<FacetPair> collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransform& a_from_b,
                                QueryStats* stats, const CollideSettings& settings) {
-  std::vector<FacetPair> pairs;
-  collide(
-      a, b, a_from_b,
-      [&](const FacetPair& p) {
-        pairs.push_back(p);
-        return true;
-      },
-      stats, settings);
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
+  return detail::collect_sorted<FacetPair>([&](auto visit) { collide(a, b, a_from_b, visit, stats, settings); });
 }
 
 #define BOXTREE_INSTANTIATE_PACKED_OVERLAP(S)                                                               \

@@ -3,9 +3,12 @@
 #include <algorithm>
 
 #include "boxtree/detail/volume_kinds.h"
+#include "query_internal.h"
 
 namespace boxtree {
 namespace {
+
+using detail::StatsSink;
 
 constexpr int kStackSize = Tree<Aabb>::kMaxHeight + 2;
 
@@ -32,15 +35,6 @@ void walk(const Tree<Volume>& tree, NodeTest&& node_test, Leaf&& leaf, QueryStat
     if (node_test(tree.volume(child))) stack[top++] = child;
   }
 }
-
-struct StatsSink {
-  QueryStats local;
-  QueryStats* out;
-  explicit StatsSink(QueryStats* o) : out(o) {}
-  ~StatsSink() {
-    if (out) *out += local;
-  }
-};
 
 // Front-to-back walk of the nodes the ray meets within [ray.t_min, t_max]; `leaf(facet, t_max)`
 // returns the new t_max, which prunes every node entered farther than it.
@@ -159,18 +153,8 @@ std::optional<RayHit> ray_any_hit(const Tree<Volume>& tree, const Ray& ray, Quer
 
 template <class Volume>
 std::vector<RayHit> ray_all_hits(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
-  std::vector<RayHit> hits;
-  ray_all_hits<Volume>(
-      tree, ray,
-      [&](const RayHit& hit) {
-        hits.push_back(hit);
-        return true;
-      },
-      stats);
-  std::sort(hits.begin(), hits.end(), [](const RayHit& x, const RayHit& y) {
-    return x.t != y.t ? x.t < y.t : x.facet < y.facet;
-  });
-  return hits;
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits<Volume>(tree, ray, visit, stats); },
+                                        detail::nearer_hit);
 }
 
 template <class Volume, class Shape>
@@ -192,16 +176,8 @@ void query_overlap(const Tree<Volume>& tree, const Shape& shape, FunctionRef<boo
 
 template <class Volume, class Shape>
 std::vector<FacetId> query_overlap(const Tree<Volume>& tree, const Shape& shape, QueryStats* stats, FacetTest test) {
-  std::vector<FacetId> facets;
-  query_overlap<Volume, Shape>(
-      tree, shape,
-      [&](FacetId f) {
-        facets.push_back(f);
-        return true;
-      },
-      stats, test);
-  std::sort(facets.begin(), facets.end());
-  return facets;
+  return detail::collect_sorted<FacetId>(
+      [&](auto visit) { query_overlap<Volume, Shape>(tree, shape, visit, stats, test); });
 }
 
 template <class Volume>
@@ -220,16 +196,7 @@ void query_plane(const Tree<Volume>& tree, const Plane& plane, FunctionRef<bool(
 
 template <class Volume>
 std::vector<FacetId> query_plane(const Tree<Volume>& tree, const Plane& plane, QueryStats* stats) {
-  std::vector<FacetId> facets;
-  query_plane<Volume>(
-      tree, plane,
-      [&](FacetId f) {
-        facets.push_back(f);
-        return true;
-      },
-      stats);
-  std::sort(facets.begin(), facets.end());
-  return facets;
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_plane<Volume>(tree, plane, visit, stats); });
 }
 
 template <class Volume>

@@ -124,23 +124,38 @@ void expect_overlap_matches(const Tree<V>& tree, const Shape& shape, const std::
   EXPECT_EQ(query_overlap(tree, shape, nullptr, FacetTest::leaf_volume), expected_leaf) << what << " (leaf volumes)";
 }
 
+// One query shape of each kind around a random point near `box`, sized 0.1% to 20% of its
+// diagonal; every 7th oriented box is flat.
+struct QueryShapes {
+  Aabb aabb;
+  Obb obb;
+  Sphere sphere;
+  Capsule capsule;
+};
+inline QueryShapes random_query_shapes(Random& r, const Aabb& box, int i) {
+  const Vec3 c = random_point_near(r, box);
+  const double s = box.extent().norm() * r.uniform(0.001, 0.2);
+  QueryShapes q;
+  q.aabb = Aabb::from_points(c, c + r.uniform_vec3(-s, s));
+  q.obb = Obb{c, random_rotation(r), r.uniform_vec3(0, s)};
+  if (i % 7 == 0) q.obb.half_extents[i % 3] = 0;
+  q.sphere = Sphere{c, s};
+  q.capsule = Capsule{c, c + r.unit_vector() * s * 2, s * 0.3};
+  return q;
+}
+
 template <class V>
 void check_overlaps(const Tree<V>& tree, int count, const std::string& name) {
   const Aabb box = mesh_bounds(tree.mesh());
-  const double size = box.extent().norm();
   Random r(23);
   std::size_t reported = 0;
   for (int i = 0; i < count; ++i) {
-    const Vec3 c = random_point_near(r, box);
-    const double s = size * r.uniform(0.001, 0.2);
-    const Aabb query = Aabb::from_points(c, c + r.uniform_vec3(-s, s));
-    expect_overlap_matches(tree, query, name + " aabb");
-    Obb obb{c, random_rotation(r), r.uniform_vec3(0, s)};
-    if (i % 7 == 0) obb.half_extents[i % 3] = 0;  // flat boxes too
-    expect_overlap_matches(tree, obb, name + " obb");
-    expect_overlap_matches(tree, Sphere{c, s}, name + " sphere");
-    expect_overlap_matches(tree, Capsule{c, c + r.unit_vector() * s * 2, s * 0.3}, name + " capsule");
-    reported += query_overlap(tree, Sphere{c, s}).size();
+    const QueryShapes q = random_query_shapes(r, box, i);
+    expect_overlap_matches(tree, q.aabb, name + " aabb");
+    expect_overlap_matches(tree, q.obb, name + " obb");
+    expect_overlap_matches(tree, q.sphere, name + " sphere");
+    expect_overlap_matches(tree, q.capsule, name + " capsule");
+    reported += query_overlap(tree, q.sphere).size();
   }
   EXPECT_GT(reported, 0u) << name << ": the test must exercise overlaps";
 }
