@@ -48,6 +48,7 @@ struct Adjacency {
 // Sorts [begin, end) and drops duplicates and `self`; returns the new end. The lists are short
 // (a dozen entries on meshes), where insertion sort beats std::sort.
 std::uint32_t* sort_unique_list(std::uint32_t* begin, std::uint32_t* end, std::uint32_t self) {
+  if (begin == end) return end;  // also a null `begin` (an empty vector's data()): no arithmetic on it
   if (end - begin > 48) {
     std::sort(begin, end);
   } else {

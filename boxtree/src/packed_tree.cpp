@@ -459,9 +459,11 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
     for (int i = 0; i < 3; ++i) {
       const Real lo = (std::max(shape.min[i], tree.bounds().min[i]) - tree.origin()[i]) * tree.inv_step()[i];
       const Real hi = (std::min(shape.max[i], tree.bounds().max[i]) - tree.origin()[i]) * tree.inv_step()[i];
-      // Within [1, 65534], where every packed box lies, so that empty slots never match.
-      grid.min[i] = std::uint16_t(std::clamp(std::floor(lo) - 1, Real(1), Real(0xFFFE)));
-      grid.max[i] = std::uint16_t(std::clamp(std::ceil(hi) + 1, Real(1), Real(0xFFFE)));
+      // Within [1, 65534], where every packed box lies, so that empty slots never match. Clamped
+      // first, the values are positive: truncation is floor (no libm call), and one more step
+      // outward covers ceil.
+      grid.min[i] = std::uint16_t(std::clamp(lo - 1, Real(1), Real(0xFFFE)));
+      grid.max[i] = std::uint16_t(std::clamp(hi + 2, Real(1), Real(0xFFFE)));
     }
     grid.prepare();
     walk(
