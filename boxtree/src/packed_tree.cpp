@@ -419,15 +419,7 @@ void ray_all_hits(const PackedAabbTree& tree, const Ray& ray, FunctionRef<bool(c
 }
 
 std::optional<RayHit> ray_any_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
-  std::optional<RayHit> found;
-  ray_all_hits(
-      tree, ray,
-      [&](const RayHit& hit) {
-        found = hit;
-        return false;
-      },
-      stats);
-  return found;
+  return detail::first_hit([&](auto visit) { ray_all_hits(tree, ray, visit, stats); });
 }
 
 std::vector<RayHit> ray_all_hits(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {

@@ -140,15 +140,7 @@ void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(con
 
 template <class Volume>
 std::optional<RayHit> ray_any_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
-  std::optional<RayHit> found;
-  ray_all_hits<Volume>(
-      tree, ray,
-      [&](const RayHit& hit) {
-        found = hit;
-        return false;
-      },
-      stats);
-  return found;
+  return detail::first_hit([&](auto visit) { ray_all_hits<Volume>(tree, ray, visit, stats); });
 }
 
 template <class Volume>

@@ -2,6 +2,7 @@
 // Pieces shared by the query files (query.cpp, collide.cpp, packed_tree.cpp); not public API.
 #include <algorithm>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "boxtree/collide.h"
@@ -41,6 +42,17 @@ inline bool facets_intersect(const TriangleMesh& mesh_a, FacetId fa, const Trian
   return triangles_intersect(mesh_a.corner(fa, 0), mesh_a.corner(fa, 1), mesh_a.corner(fa, 2),
                              a_from_b.apply(mesh_b.corner(fb, 0)), a_from_b.apply(mesh_b.corner(fb, 1)),
                              a_from_b.apply(mesh_b.corner(fb, 2)));
+}
+
+// The body of ray_any_hit: the first hit that `all_hits(visit)` reports (it stops there).
+template <class AllHits>
+std::optional<RayHit> first_hit(AllHits&& all_hits) {
+  std::optional<RayHit> found;
+  all_hits([&](const RayHit& hit) {
+    found = hit;
+    return false;
+  });
+  return found;
 }
 
 // Ray hits in the order the conveniences return them: by distance, then facet id.
