@@ -65,6 +65,9 @@ struct EdgeCorrectingResult : btManifoldResult {
 
   void addContactPoint(const btVector3& normalOnBInWorld, const btVector3& pointInWorld, btScalar depth) override {
     const std::uint8_t active = mesh->activeEdges()[facet];
+    // The common case, a two-sided mesh and no internal edge: the contact as GJK gave it, without
+    // fetching the triangle.
+    if (mesh->isTwoSided() && active == 0x7) return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
     btVector3 tri[3];
     mesh->scaledTriangle(facet, tri);
     const btVector3 front_local = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
