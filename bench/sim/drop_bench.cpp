@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -94,6 +95,7 @@ int main(int argc, char** argv) {
   std::string engines_text = "bullet,ode";
   int steps = 240;
   std::uint64_t seed = 1;
+  std::vector<int> only_bodies;
   app.add_flag("--quick", quick, "One small scene, aabb and obb-min only, 90 steps (CI)");
   app.add_option("--json", json_path, "Write the rows (bench/results.json schema) here");
   app.add_option("--markdown", markdown_path, "Write the tables as a markdown fragment here");
@@ -102,6 +104,8 @@ int main(int argc, char** argv) {
   app.add_option("--engines", engines_text, "bullet, ode or both")->capture_default_str();
   app.add_option("--steps", steps, "Steps per run (the last two thirds are measured)")->capture_default_str();
   app.add_option("--seed", seed, "Scene seed")->capture_default_str();
+  app.add_option("--bodies", only_bodies, "Run only the scenes with these body counts (100, 500, 1000, 2000)")
+      ->delimiter(',');
   CLI11_PARSE(app, argc, argv);
 
   auto split = [](const std::string& text) {
@@ -118,6 +122,16 @@ int main(int argc, char** argv) {
     configs = {{64, 60, true}};
     methods = {"aabb", "obb-min"};
     steps = std::min(steps, 90);
+  }
+  if (!only_bodies.empty()) {
+    std::vector<Config> chosen;
+    for (const Config& config : configs)
+      if (std::find(only_bodies.begin(), only_bodies.end(), config.bodies) != only_bodies.end()) chosen.push_back(config);
+    if (chosen.empty()) {
+      std::fprintf(stderr, "drop_bench: --bodies matches no scene (100, 500, 1000, 2000; 60 with --quick)\n");
+      return 2;
+    }
+    configs = chosen;
   }
   try {
     for (const std::string& m : methods) boxtree::parse_method(m);

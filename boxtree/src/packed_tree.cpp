@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "query_internal.h"
 
@@ -195,6 +196,119 @@ struct GridBox {
 #endif
 };
 
+// `box` on `tree`'s grid, rounded outward by one more step than needed (the multiply's error is
+// far below a step, and this is per query, not per node), clamped to [1, 65534] where every
+// packed box lies, so that empty slots never match. NaN sides give the whole range: never culls.
+GridBox grid_box_of(const PackedAabbTree& tree, const Aabb& box) {
+  GridBox grid;
+  for (int i = 0; i < 3; ++i) {
+    const Real lo = (std::max(box.min[i], tree.bounds().min[i]) - tree.origin()[i]) * tree.inv_step()[i];
+    const Real hi = (std::min(box.max[i], tree.bounds().max[i]) - tree.origin()[i]) * tree.inv_step()[i];
+    // Clamped first, the values are positive: truncation is floor (no libm call), and one more
+    // step outward covers ceil. Written so that NaN takes the outer bound.
+    grid.min[i] = std::uint16_t(lo - 1 >= 1 ? std::min(lo - 1, Real(0xFFFE)) : Real(1));
+    grid.max[i] = std::uint16_t(hi + 2 <= 0xFFFE ? std::max(hi + 2, Real(1)) : Real(0xFFFE));
+  }
+  grid.prepare();
+  return grid;
+}
+
+const Aabb& bounding_box_of(const Aabb& box) { return box; }
+Aabb bounding_box_of(const Obb& box) {
+  const Vec3 reach = box.axes.cwiseAbs() * box.half_extents;
+  return {box.center - reach, box.center + reach};
+}
+Aabb bounding_box_of(const Sphere& sphere) {
+  return {sphere.center.array() - sphere.radius, sphere.center.array() + sphere.radius};
+}
+Aabb bounding_box_of(const Capsule& capsule) {
+  return {capsule.p0.cwiseMin(capsule.p1).array() - capsule.radius,
+          capsule.p0.cwiseMax(capsule.p1).array() + capsule.radius};
+}
+
+// The three face axes of an oriented box as separating axes for four children at once, in
+// single precision on the grid: with the box's bounding box on the grid (GridBox, the three
+// world axes) these are the six face axes of the box-box test; the nine edge-edge axes are left
+// to the callers that need an exact answer (they rarely separate what the faces do not).
+// Along axis u, a child with grid corners lo, hi (world centre origin + step * (lo + hi) / 2,
+// half extent step * (hi - lo) / 2) is apart from the box (centre C, radius r_u along u) when
+//   |w . (lo + hi) - 2 u . (C - origin)| > |w| . (hi - lo) + 2 r_u,   w = u * step (per axis).
+// lo + hi and hi - lo are exact in float; the products and sums round by a few float ulps of
+// the terms' magnitudes, which `pad` (16 ulps of their sum) covers, so the test never culls a
+// box that meets the oriented box. Non-finite input disables it (every child passes).
+struct GridObbAxes {
+  bool enabled = false;
+  float w[3][3];   // [axis j][grid axis i]
+  float two_k[3];  // 2 u_j . (C - origin)
+  float reach[3];  // 2 r_j + pad
+
+  // `radii`: the box's radius along each of its axes (its half extents if the axes are
+  // orthonormal).
+  GridObbAxes(const PackedAabbTree& tree, const Vec3& center, const Mat3& axes, const Vec3& radii) {
+    const Vec3 offset = center - tree.origin();
+    bool finite = true;
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 u = axes.col(j);
+      const Vec3 wj = u.cwiseProduct(tree.step());
+      const Real k2 = 2 * u.dot(offset);
+      const Real r2 = 2 * radii[j];
+      const Real magnitude = wj.cwiseAbs().sum() * 2 * 65535 + std::abs(k2) + r2;
+      const Real pad = 16 * Real(std::numeric_limits<float>::epsilon()) * magnitude;
+      finite = finite && std::isfinite(magnitude) && magnitude < Real(1e30);
+      for (int i = 0; i < 3; ++i) w[j][i] = float(wj[i]);
+      two_k[j] = float(k2);
+      reach[j] = float(r2 + pad);
+    }
+    enabled = finite;
+  }
+
+  // The children of `mask` (bit c: child c) that no face axis separates from the box.
+  unsigned overlaps(const PackedAabbTree::Node& node, unsigned mask) const {
+    if (!enabled || mask == 0) return mask;
+#if defined(__SSE2__)
+    const __m128i zero = _mm_setzero_si128();
+    const auto lanes = [&](const std::uint16_t* p) {
+      return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero));
+    };
+    __m128 sum[3], diff[3];
+    for (int i = 0; i < 3; ++i) {
+      const __m128 lo = lanes(node.min[i]), hi = lanes(node.max[i]);
+      sum[i] = _mm_add_ps(lo, hi);
+      diff[i] = _mm_sub_ps(hi, lo);
+    }
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    __m128 apart = _mm_setzero_ps();
+    for (int j = 0; j < 3; ++j) {
+      __m128 distance = _mm_set1_ps(-two_k[j]);
+      __m128 radius = _mm_set1_ps(reach[j]);
+      for (int i = 0; i < 3; ++i) {
+        distance = _mm_add_ps(distance, _mm_mul_ps(_mm_set1_ps(w[j][i]), sum[i]));
+        radius = _mm_add_ps(radius, _mm_mul_ps(_mm_set1_ps(std::abs(w[j][i])), diff[i]));
+      }
+      apart = _mm_or_ps(apart, _mm_cmpgt_ps(_mm_andnot_ps(sign, distance), radius));
+    }
+    return mask & ~unsigned(_mm_movemask_ps(apart));
+#else
+    for (int c = 0; c < kWidth; ++c) {
+      if (!(mask >> c & 1u)) continue;
+      for (int j = 0; j < 3; ++j) {
+        float distance = -two_k[j], radius = reach[j];
+        for (int i = 0; i < 3; ++i) {
+          const float lo = float(node.min[i][c]), hi = float(node.max[i][c]);
+          distance += w[j][i] * (lo + hi);
+          radius += std::abs(w[j][i]) * (hi - lo);
+        }
+        if (std::abs(distance) > radius) {
+          mask &= ~(1u << c);
+          break;
+        }
+      }
+    }
+    return mask;
+#endif
+  }
+};
+
 // Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c; never
 // set for an empty slot);
 // `leaf(facet)` returns false to stop. The caller has tested the root's volume (the exact bounds).
@@ -238,12 +352,20 @@ void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, Query
   }
 }
 
-// Bit c set: child c's (dequantized) box passes `test(box)`.
+// The children of `mask` whose (dequantized) box passes `test(box)`.
 template <class Test>
-unsigned mask_of(const PackedAabbTree& tree, const PackedAabbTree::Node& node, Test&& test) {
+unsigned refine_mask(const PackedAabbTree& tree, const PackedAabbTree::Node& node, unsigned mask, Test&& test) {
+  for (unsigned rest = mask; rest != 0; rest &= rest - 1) {
+    const int c = __builtin_ctz(rest);
+    if (!test(tree.child_box(node, c))) mask &= ~(1u << c);
+  }
+  return mask;
+}
+
+// Bit c set: child c is a leaf (a facet).
+unsigned leaf_slots(const PackedAabbTree::Node& node) {
   unsigned mask = 0;
-  for (int c = 0; c < kWidth; ++c)
-    if (node.link[c] != PackedAabbTree::kEmpty && test(tree.child_box(node, c))) mask |= 1u << c;
+  for (int c = 0; c < kWidth; ++c) mask |= unsigned(PackedAabbTree::is_leaf(node.link[c])) << c;
   return mask;
 }
 
@@ -442,29 +564,36 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
     }
     return visit(f);
   };
+  // Every node test starts with the shape's bounding box on the grid: six integer compares per
+  // child, four children at once. An Aabb query needs nothing more.
+  const GridBox grid = grid_box_of(tree, bounding_box_of(shape));
   if constexpr (std::is_same_v<Shape, Aabb>) {
-    // The query box on the grid, clamped to the bounds first (an infinite side is fine), so
-    // that every node test is six integer compares.
-    // One step more outward instead of quantize_down/up's exact rounding: the multiply's error
-    // is far below a step, and this is per query.
-    GridBox grid;
-    for (int i = 0; i < 3; ++i) {
-      const Real lo = (std::max(shape.min[i], tree.bounds().min[i]) - tree.origin()[i]) * tree.inv_step()[i];
-      const Real hi = (std::min(shape.max[i], tree.bounds().max[i]) - tree.origin()[i]) * tree.inv_step()[i];
-      // Within [1, 65534], where every packed box lies, so that empty slots never match. Clamped
-      // first, the values are positive: truncation is floor (no libm call), and one more step
-      // outward covers ceil.
-      grid.min[i] = std::uint16_t(std::clamp(lo - 1, Real(1), Real(0xFFFE)));
-      grid.max[i] = std::uint16_t(std::clamp(hi + 2, Real(1), Real(0xFFFE)));
-    }
-    grid.prepare();
     walk(
         tree, [&](const PackedAabbTree::Node& node) { return grid.overlaps(node); }, leaf, sink.local);
-  } else {
+  } else if constexpr (std::is_same_v<Shape, Obb>) {
+    // Then the box's own face axes, in float on the grid. An inner child that passes all six
+    // face axes is entered (the edge axes would cull few more, at twice the cost); a leaf child
+    // gets the exact box test only when the caller asked for leaf volumes, since the triangle
+    // test decides otherwise.
+    // (The radii allow for axes that are not quite orthonormal.)
+    const GridObbAxes faces(tree, shape.center, shape.axes,
+                            (shape.axes.transpose() * shape.axes).cwiseAbs() * shape.half_extents);
     walk(
         tree,
         [&](const PackedAabbTree::Node& node) {
-          return mask_of(tree, node, [&](const Aabb& box) { return overlaps(box, shape); });
+          const unsigned mask = faces.overlaps(node, grid.overlaps(node));
+          if (test == FacetTest::exact_triangle) return mask;
+          return refine_mask(tree, node, mask & leaf_slots(node),
+                             [&](const Aabb& box) { return overlaps(box, shape); }) |
+                 (mask & ~leaf_slots(node));
+        },
+        leaf, sink.local);
+  } else {
+    // Spheres and capsules: the exact box test (a distance) on the children that pass.
+    walk(
+        tree,
+        [&](const PackedAabbTree::Node& node) {
+          return refine_mask(tree, node, grid.overlaps(node), [&](const Aabb& box) { return overlaps(box, shape); });
         },
         leaf, sink.local);
   }
@@ -506,6 +635,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
   QueryStats& local = sink.local;
   const TriangleMesh& mesh_a = a.mesh();
   const TriangleMesh& mesh_b = b.mesh();
+  const RigidTransform b_from_a = a_from_b.inverse();
   struct Pair {
     NodeRef a, b;
     Aabb box_a, box_b;
@@ -535,9 +665,23 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
     // Split the larger box (or the one that is not a leaf), as collide.cpp does.
     const bool split_a = !leaf_a && (leaf_b || surface_area(pair.box_a) >= surface_area(pair.box_b));
     const PackedAabbTree::Node& split = split_a ? a.nodes()[link_a] : b.nodes()[link_b];
+    // The other node's box as an oriented box in the split tree's frame: its bounding box on
+    // that grid and its face axes cull most children in a few vector instructions; the exact
+    // box-box test (all fifteen axes) decides for the rest.
+    unsigned candidates;
+    if (split_a) {
+      const Obb other{a_from_b.apply(pair.box_b.center()), a_from_b.rotation, pair.box_b.extent() * Real(0.5)};
+      candidates = GridObbAxes(a, other.center, other.axes, other.half_extents)
+                       .overlaps(split, grid_box_of(a, bounding_box_of(other)).overlaps(split));
+    } else {
+      const Obb other{b_from_a.apply(pair.box_a.center()), b_from_a.rotation, pair.box_a.extent() * Real(0.5)};
+      candidates = GridObbAxes(b, other.center, other.axes, other.half_extents)
+                       .overlaps(split, grid_box_of(b, bounding_box_of(other)).overlaps(split));
+    }
     for (int slot = kWidth - 1; slot >= 0; --slot) {
       if (split.link[slot] == PackedAabbTree::kEmpty) continue;
       ++local.volume_tests;
+      if (!(candidates >> slot & 1u)) continue;
       Pair child = pair;
       if (split_a) {
         child.a.value = link_a * kWidth + std::uint32_t(slot);
