@@ -238,9 +238,10 @@ Aabb bounding_box_of(const Capsule& capsule) {
 // box that meets the oriented box. Non-finite input disables it (every child passes).
 struct GridObbAxes {
   bool enabled = false;
-  float w[3][3];   // [axis j][grid axis i]
-  float two_k[3];  // 2 u_j . (C - origin)
-  float reach[3];  // 2 r_j + pad
+  GridObbAxes() = default;  // disabled: every child passes
+  float w[3][3] = {};   // [axis j][grid axis i]
+  float two_k[3] = {};  // 2 u_j . (C - origin)
+  float reach[3] = {};  // 2 r_j + pad
 
   // `radii`: the box's radius along each of its axes (its half extents if the axes are
   // orthonormal).
@@ -644,6 +645,13 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
   // (kWidth - 1) * (height(a) + height(b)) + 1 pairs are ever pending.
   Pair stack[(kWidth - 1) * 2 * PackedAabbTree::kMaxHeight + kWidth];
   int top = 0;
+  // The other node's box as an oriented box in the split tree's frame (its bounding box on that
+  // grid and its face axes), which culls most children in a few vector instructions; the exact
+  // box-box test (all fifteen axes) decides for the rest.
+  GridBox cull_grid{};
+  GridObbAxes cull_faces;
+  bool cached = false, cached_split_a = false;
+  NodeRef cached_other;
   ++local.volume_tests;
   if (overlaps(a.bounds(), b.bounds(), a_from_b)) stack[top++] = {NodeRef{}, NodeRef{}, a.bounds(), b.bounds()};
   while (top > 0) {
@@ -665,19 +673,22 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
     // Split the larger box (or the one that is not a leaf), as collide.cpp does.
     const bool split_a = !leaf_a && (leaf_b || surface_area(pair.box_a) >= surface_area(pair.box_b));
     const PackedAabbTree::Node& split = split_a ? a.nodes()[link_a] : b.nodes()[link_b];
-    // The other node's box as an oriented box in the split tree's frame: its bounding box on
-    // that grid and its face axes cull most children in a few vector instructions; the exact
-    // box-box test (all fifteen axes) decides for the rest.
-    unsigned candidates;
-    if (split_a) {
-      const Obb other{a_from_b.apply(pair.box_b.center()), a_from_b.rotation, pair.box_b.extent() * Real(0.5)};
-      candidates = GridObbAxes(a, other.center, other.axes, other.half_extents)
-                       .overlaps(split, grid_box_of(a, bounding_box_of(other)).overlaps(split));
-    } else {
-      const Obb other{b_from_a.apply(pair.box_a.center()), b_from_a.rotation, pair.box_a.extent() * Real(0.5)};
-      candidates = GridObbAxes(b, other.center, other.axes, other.half_extents)
-                       .overlaps(split, grid_box_of(b, bounding_box_of(other)).overlaps(split));
+    // The walk is depth first, so the same other node meets many split nodes in a row: its
+    // culling form is kept until another one comes.
+    const bool same_other = split_a ? (cached_split_a && pair.b.value == cached_other.value)
+                                    : (!cached_split_a && pair.a.value == cached_other.value);
+    if (!same_other || !cached) {
+      const PackedAabbTree& tree = split_a ? a : b;
+      const RigidTransform& to_split = split_a ? a_from_b : b_from_a;
+      const Aabb& box = split_a ? pair.box_b : pair.box_a;
+      const Obb other{to_split.apply(box.center()), to_split.rotation, box.extent() * Real(0.5)};
+      cull_grid = grid_box_of(tree, bounding_box_of(other));
+      cull_faces = GridObbAxes(tree, other.center, other.axes, other.half_extents);
+      cached = true;
+      cached_split_a = split_a;
+      cached_other = split_a ? pair.b : pair.a;
     }
+    const unsigned candidates = cull_faces.overlaps(split, cull_grid.overlaps(split));
     for (int slot = kWidth - 1; slot >= 0; --slot) {
       if (split.link[slot] == PackedAabbTree::kEmpty) continue;
       ++local.volume_tests;
