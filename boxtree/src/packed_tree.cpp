@@ -449,6 +449,8 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
   if (!intersect_ray(tree.bounds(), RayPrecomputed(ray), ray.t_min, t_max, &t_enter)) return;
   const GridRay grid(tree, ray, t_enter);
   const float s_min = grid.s_down(ray.t_min);
+  Real t_of_s_max = t_max;
+  float s_max = grid.s_up(t_max);
   const PackedAabbTree::Node* nodes = tree.nodes().data();
 
   struct Entry {
@@ -467,8 +469,9 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
       continue;
     }
     const PackedAabbTree::Node& node = nodes[entry.link];
+    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);  // only when a hit shortened the ray
     float s_enter[kWidth];
-    unsigned mask = grid.hits(node, s_min, grid.s_up(t_max), s_enter);
+    unsigned mask = grid.hits(node, s_min, s_max, s_enter);
     stats.volume_tests += kWidth;
     // The children met, sorted by entry (insertion sort of at most four), pushed farthest first
     // so that the nearest is explored first.
