@@ -182,27 +182,43 @@ ContactPoint make_contact(const Vec3& position, const Vec3& normal, Real depth) 
 // ---------------------------------------------------------------------------------------------
 // Contact reduction
 
-// Twice the area of the 2D convex hull of the points (monotone chain; n <= a few dozen).
-Real hull_area_2d(std::array<std::pair<Real, Real>, 64>& p, int n) {
-  if (n < 3) return 0;
-  std::sort(p.begin(), p.begin() + n);
-  std::array<std::pair<Real, Real>, 130> hull;
+using Point2 = std::pair<Real, Real>;
+
+Real cross_2d(const Point2& o, const Point2& a, const Point2& b) {
+  return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+}
+
+// The convex hull of n points (sorted in place) as a counter-clockwise polygon without collinear
+// vertices (Andrew's monotone chain); returns its vertex count (1 or 2 for a point or a segment).
+int convex_hull_2d(Point2* p, int n, Point2* hull) {
+  std::sort(p, p + n);
+  if (n < 3) {
+    std::copy(p, p + n, hull);
+    return n == 2 && p[0] == p[1] ? 1 : n;
+  }
   int k = 0;
-  const auto cross = [](const std::pair<Real, Real>& o, const std::pair<Real, Real>& a,
-                        const std::pair<Real, Real>& b) {
-    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
-  };
   for (int i = 0; i < n; ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    while (k >= 2 && cross_2d(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
     hull[k++] = p[i];
   }
   for (int i = n - 2, lower = k + 1; i >= 0; --i) {
-    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    while (k >= lower && cross_2d(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
     hull[k++] = p[i];
   }
-  Real area = 0;
-  for (int i = 0; i + 1 < k; ++i) area += hull[i].first * hull[i + 1].second - hull[i + 1].first * hull[i].second;
-  return std::abs(area);
+  return std::max(k - 1, 1);  // the last point repeats the first
+}
+
+// Twice the area that q adds to the convex polygon `hull` (counter-clockwise, h vertices; a
+// segment or a point when h < 3): the triangles from q to the edges that face it.
+Real added_area_2d(const Point2* hull, int h, const Point2& q) {
+  if (h == 1) return 0;
+  if (h == 2) return std::abs(cross_2d(hull[0], hull[1], q));
+  Real added = 0;
+  for (int i = 0; i < h; ++i) {
+    const Real c = cross_2d(hull[i], hull[(i + 1) % h], q);
+    if (c < 0) added -= c;
+  }
+  return added;
 }
 
 // reduce_contacts on an array; returns the new count.
@@ -226,45 +242,58 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
 
   // Keep the deepest, then greedily the point that makes the largest hull (in the plane across
   // the deepest contact's normal), ties (collinear sets) broken by the distance to the chosen set.
+  // The hull of the chosen set is kept, so a candidate costs the area it adds (its visible edges)
+  // and its distance is updated once per choice: O(max_count * n * hull) in all.
   Vec3 u;
   Vec3 w;
   detail::orthonormal_completion(contacts[0].normal.normalized(), u, w);
   const int n = std::min(kept, 64);
+  std::array<Point2, 64> planar;
+  std::array<Real, 64> distance;  // squared, to the nearest chosen point
   std::array<bool, 64> chosen{};
+  Real extent_squared = 0;
+  for (int i = 0; i < n; ++i) {
+    planar[i] = {contacts[i].position.dot(u), contacts[i].position.dot(w)};
+    distance[i] = (contacts[i].position - contacts[0].position).squaredNorm();
+    extent_squared = std::max(extent_squared, distance[i]);
+  }
   std::array<int, 64> order{};
+  std::array<Point2, 64> points;
+  std::array<Point2, 130> hull;
   chosen[0] = true;
   order[0] = 0;
   int selected = 1;
-  std::array<std::pair<Real, Real>, 64> scratch;
-  while (selected < max_count) {
+  int h = 1;
+  hull[0] = planar[0];
+  Real area = 0;  // twice the chosen set's hull area
+  while (selected < std::min(max_count, n)) {
     int best = -1;
     Real best_area = -1;
     Real best_distance = -1;
     for (int i = 0; i < n; ++i) {
       if (chosen[i]) continue;
-      int m = 0;
-      for (int s = 0; s < selected; ++s) {
-        const Vec3& p = contacts[order[s]].position;
-        scratch[m++] = {p.dot(u), p.dot(w)};
-      }
-      scratch[m++] = {contacts[i].position.dot(u), contacts[i].position.dot(w)};
-      const Real area = hull_area_2d(scratch, m);
-      Real distance = kInf;
-      for (int s = 0; s < selected; ++s) {
-        distance = std::min(distance, (contacts[i].position - contacts[order[s]].position).squaredNorm());
-      }
-      // Areas compare with a relative slack so that rounding does not beat a real spread.
-      const bool better = area > best_area * (1 + 1e-9) ||
-                          (area >= best_area * (1 - 1e-9) && distance > best_distance);
+      const Real candidate_area = area + added_area_2d(hull.data(), h, planar[i]);
+      // Areas compare with a slack (relative, and to the set's size for collinear sets, whose
+      // areas are rounding noise) so that rounding does not beat a real spread.
+      const Real slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
+      const bool better = candidate_area > best_area + slack ||
+                          (candidate_area >= best_area - slack && distance[i] > best_distance);
       if (better) {
         best = i;
-        best_area = area;
-        best_distance = distance;
+        best_area = candidate_area;
+        best_distance = distance[i];
       }
     }
     if (best < 0) break;
     chosen[best] = true;
     order[selected++] = best;
+    for (int i = 0; i < n; ++i) {
+      distance[i] = std::min(distance[i], (contacts[i].position - contacts[best].position).squaredNorm());
+    }
+    for (int s = 0; s < selected; ++s) points[s] = planar[order[s]];
+    h = convex_hull_2d(points.data(), selected, hull.data());
+    area = 0;
+    for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[(i + 1) % h]);
   }
   std::array<ContactPoint, 64> result;
   for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];
@@ -773,12 +802,20 @@ void ccd_shape_center(const void* object, ccd_vec3_t* center) {
 // u.r = const (a cylinder's |u.axis|, a triangle's corner switch across an edge); moves along
 // those circles (+-r x u) are tried too, since a minimum along a crease is otherwise out of the
 // pattern's reach.
+// `probe`: before the first round the moves are tried at min_step; if none lowers f there by more
+// than `noise` (rounding of f on large coordinates), the normal is a local minimum to the search's
+// resolution and the search stops at once, returning true (at a kink of f, where a flat face of
+// the Minkowski difference is the answer, the search would otherwise repeat its failure down to
+// min_step: ~14 rounds of up to 16 moves). `stop_below`: stop as soon as f is below it (the
+// caller's "apart" bound).
 template <class F>
-void polish_normal(const F& f, const Vec3& front, Vec3& normal, Real& value, Real step = 1e-2, Real min_step = 1e-7,
-                   int max_evaluations = 150, const Vec3* ridges = nullptr, int ridge_count = 0) {
+bool polish_normal(const F& f, const Vec3& front, Vec3& normal, Real& value, Real step = 1e-2, Real min_step = 1e-7,
+                   int max_evaluations = 150, const Vec3* ridges = nullptr, int ridge_count = 0, Real noise = 0,
+                   bool probe = false, Real stop_below = -kInf) {
   int evaluations = 0;
   Vec3 momentum = Vec3::Zero();
-  while (step > min_step && evaluations < max_evaluations) {
+  bool probe_now = probe;
+  while (step > min_step && evaluations < max_evaluations && !(value < stop_below)) {
     Vec3 t1;
     Vec3 t2;
     detail::orthonormal_completion(normal, t1, t2);
@@ -792,24 +829,33 @@ void polish_normal(const F& f, const Vec3& front, Vec3& normal, Real& value, Rea
       moves[9 + 2 * k] = along / length;
       moves[10 + 2 * k] = -along / length;
     }
-    bool improved = false;
-    for (const Vec3& move : moves) {
-      if (move.squaredNorm() == 0) continue;
-      const Vec3 candidate = (normal + step * move).normalized();
-      if (candidate.dot(front) < -kBehind) continue;  // never wander behind a one-sided triangle
-      const Real candidate_value = f(candidate);
-      ++evaluations;
-      if (candidate_value < value) {
-        momentum = (candidate - normal).normalized();
-        normal = candidate;
-        value = candidate_value;
-        improved = true;
-        break;
+    const auto try_moves = [&](Real length, Real threshold) {
+      for (const Vec3& move : moves) {
+        if (move.squaredNorm() == 0) continue;
+        const Vec3 candidate = (normal + length * move).normalized();
+        if (candidate.dot(front) < -kBehind) continue;  // never wander behind a one-sided triangle
+        const Real candidate_value = f(candidate);
+        ++evaluations;
+        if (candidate_value < value - threshold) {
+          momentum = (candidate - normal).normalized();
+          normal = candidate;
+          value = candidate_value;
+          return true;
+        }
       }
+      return false;
+    };
+    if (probe_now) {
+      probe_now = false;
+      const bool descends = try_moves(min_step, noise);
+      momentum.setZero();  // the probe's move is no direction to follow
+      if (!descends) return true;
     }
+    const bool improved = try_moves(step, 0);
     if (!improved) momentum.setZero();
     step = improved ? step * 2 : step / 2;
   }
+  return false;
 }
 
 ccd_t make_ccd(Real size) {
@@ -1250,12 +1296,14 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   const Real margin = std::max(options.margin, Real(0));
   const Real limit = -margin - tolerance(size, std::max({tri.coord, max_abs(p0), max_abs(p1)}));
 
-  // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u).
-  const auto lowest = [&](const Vec3& u) {
+  // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u),
+  // so the overlap is the corners' reach along u beyond mid plus the cylinder's half extent along u.
+  const Vec3 corner[3] = {tri.v[0] - mid, tri.v[1] - mid, tri.v[2] - mid};
+  const auto overlap_along = [&](const Vec3& u) {
     const Real along = u.dot(w);
-    return u.dot(mid) - half * std::abs(along) - radius * std::sqrt(std::max(Real(0), 1 - along * along));
+    const Real top = std::max({u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])});
+    return top + half * std::abs(along) + radius * std::sqrt(std::max(Real(0), 1 - along * along));
   };
-  const auto overlap_along = [&](const Vec3& u) { return project(tri, u).hi - lowest(u); };
 
   // The two least candidates are polished (the least is not always in the deepest basin).
   Real values[2] = {kInf, kInf};
@@ -1283,6 +1331,7 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   consider(w);
   consider(-w);
   consider(mid - closest_point_on_triangle(mid, a, b, c));
+  if (apart) return 0;  // most candidates of the query box are apart along one of these already
   for (int j = 0; j < 3; ++j) {
     const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
     const Vec3 u = w.cross(e);
@@ -1295,19 +1344,95 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     consider(e.cross(tri.normal));  // the edge's outward normal in the plane (deep overlaps)
   }
   if (apart) return 0;
-  // The general routine's pattern search, to 1e-6 rad (the depth is then within ~1e-12 of the
-  // sizes on smooth minima, exact on flat ones).
-  Real best = kInf;
-  Vec3 best_normal = tri.normal;
+  // The least candidate is often the answer already: a flat face of the Minkowski difference
+  // (the triangle's face under a rim point, a disk over a corner, the side over a corner or along
+  // an edge), where no move of the pattern search at its smallest step lowers the overlap. That
+  // probe (one round of moves) settles ~70% of the contacts of resting cylinders.
+  const Real noise = 64 * kEps * (std::max({tri.coord, max_abs(p0), max_abs(p1)}) + size);
   Vec3 ridges[4] = {w};
   for (int j = 0; j < 3; ++j) ridges[1 + j] = (tri.v[(j + 1) % 3] - tri.v[j]).normalized();
-  for (int k = 0; k < 2 && values[k] < kInf; ++k) {
-    polish_normal(overlap_along, one_sided ? tri.normal : Vec3::Zero(), normals[k], values[k], 1e-2, 1e-6, 150, ridges,
-                  4);
-    if (values[k] < best) {
-      best = values[k];
-      best_normal = normals[k];
+  const Vec3 front = one_sided ? tri.normal : Vec3::Zero();
+  Real best = values[0];
+  Vec3 best_normal = normals[0];
+  const bool flat = polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 1, ridges, 4, noise, true, limit);
+  // Else the minimum is on a curved face: a disk's rim against an edge (the faces of the Minkowski
+  // difference swept by an edge and a rim point have normals across the edge, on the great circle
+  // u . e = 0). Along that circle the triangle's support is the edge on the side of its outward
+  // normal m, and the overlap is a smooth 1D function but for kinks where the lowest point of the
+  // cylinder jumps: scanned, then golden-section search around the least sample (~1e-6 rad, so
+  // the depth is within ~1e-11 of the sizes on smooth minima). The least of the circles and the
+  // candidates is then polished (probed first, as above). A flat minimum can be a shallower
+  // basin than a rim on an edge too: the scans are done for it as well, and refined only where
+  // a sample is below it.
+  if (!flat && values[1] < best) {
+    best = values[1];
+    best_normal = normals[1];
+  }
+  // The circle from n (x = 0) through m (x = 1) to -n (x = 2), without trigonometry; one-sided
+  // triangles only need u . n >= 0 (x <= 1). Scanned denser near n (x ~ i^2): resting contacts
+  // have normals close to the face's.
+  const auto on_circle = [&](const Vec3& m, Real x) {
+    const Vec3 u = x <= 1 ? Vec3((1 - x) * tri.normal + x * m) : Vec3((2 - x) * m - (x - 1) * tri.normal);
+    return Vec3(u / u.norm());
+  };
+  const Real reach = one_sided ? 1 : 2;
+  constexpr int kScan = 10;
+  const auto scan_at = [&](int i) { return reach * Real(i * i) / Real(kScan * kScan); };
+  Vec3 circle_m[3];
+  int circle_least[3];
+  Real circle_value[3];
+  for (int j = 0; j < 3; ++j) {
+    const Vec3 m = (tri.v[(j + 1) % 3] - tri.v[j]).cross(tri.normal).normalized();
+    circle_m[j] = m;
+    circle_value[j] = kInf;
+    circle_least[j] = 0;
+    for (int i = 0; i <= kScan; ++i) {
+      const Real value = overlap_along(on_circle(m, scan_at(i)));
+      if (value < circle_value[j]) {
+        circle_value[j] = value;
+        circle_least[j] = i;
+      }
     }
+  }
+  bool refined = false;
+  for (int j = 0; j < 3 && !(best < limit); ++j) {
+    if (flat && !(circle_value[j] < best - noise)) continue;
+    refined = true;
+    const Vec3& m = circle_m[j];
+    const auto consider_at = [&](Real x) {
+      const Vec3 u = on_circle(m, x);
+      const Real value = overlap_along(u);
+      if (value < best) {
+        best = value;
+        best_normal = u;
+      }
+      return value;
+    };
+    Real lo = scan_at(std::max(circle_least[j] - 1, 0));
+    Real hi = scan_at(std::min(circle_least[j] + 1, kScan));
+    constexpr Real kGolden = 0.38196601125010515;  // (3 - sqrt 5) / 2
+    Real x1 = lo + kGolden * (hi - lo);
+    Real x2 = hi - kGolden * (hi - lo);
+    Real f1 = consider_at(x1);
+    Real f2 = consider_at(x2);
+    for (int iteration = 0; iteration < 24; ++iteration) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = lo + kGolden * (hi - lo);
+        f1 = consider_at(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = hi - kGolden * (hi - lo);
+        f2 = consider_at(x2);
+      }
+    }
+  }
+  if ((refined || !flat) && !(best < limit)) {
+    polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 150, ridges, 4, noise, true, limit);
   }
   if (!(best >= -margin)) return 0;
   const Vec3 normal = best_normal;

@@ -95,12 +95,13 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
                             const ContactOptions& options, ContactPoint* out);
 
 // A cylinder (axis p0-p1, radius): the same answer as contact_convex_triangle with
-// support_cylinder (least overlap over the normals, depth to ~1e-12 of the sizes), but closed-form
+// support_cylinder (least overlap over the normals, depth to ~1e-11 of the sizes), but closed-form
 // where possible: the overlap is taken along the normals of the known flat cases (the triangle's
-// normal, the axis, axis x edge, radial directions to the corners, the edges' in-plane normals)
-// and polished from the two least (rim against an edge), so no GJK/EPA runs except behind a
-// one-sided triangle or for degenerate input (about 1.4% of random deep overlaps end in another
-// basin than contact_convex_triangle's, either way). When the
+// normal, the axis, axis x edge, radial directions to the corners, the edges' in-plane normals);
+// the curved case (a rim against an edge) has its normal across the edge and is searched along
+// those three circles of normals, then polished. No GJK/EPA runs except behind a one-sided
+// triangle or for degenerate input (about 0.3% of random deep overlaps end in another basin than
+// contact_convex_triangle's, either way). When the
 // normal is the triangle's, a patch: the ends of the side's lowest line and points of the lower
 // disk's rim over the triangle (a cylinder lying or standing on a facet), each at its own depth.
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
