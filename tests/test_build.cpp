@@ -168,6 +168,32 @@ TEST(Build, PairRankings) {
   }
 }
 
+// The rounds rank pairs by boxes in a frame of the mesh's own (its bounding box's corner, a
+// power-of-two scale), so moving a mesh far away or scaling it by a power of two, up to the
+// largest coordinates allowed, gives the same tree shape; a vertex no facet uses does not count.
+TEST(Build, ShapeIndependentOfPowerOfTwoScaleAndFarAwayVertices) {
+  const TriangleMesh mesh = make_bumpy_sphere(40, 20, 0.2, 3);
+  for (MergeCost cost : {MergeCost::surface_area, MergeCost::volume}) {
+    BuildSettings settings;
+    settings.cost = cost;
+    const Tree<Aabb> reference = build_tree<Aabb>(mesh, settings);
+    for (const double scale : {0x1p-60, 0x1p+40, 0x1p+150}) {
+      TriangleMesh scaled = mesh;
+      for (Vec3& v : scaled.vertices) v *= scale;
+      const Tree<Aabb> tree = build_tree<Aabb>(scaled, settings);
+      expect_same_topology(reference, tree, "scale " + std::to_string(scale));
+      EXPECT_EQ(validate_tree(tree), "");
+    }
+    TriangleMesh unused_vertex = mesh;
+    unused_vertex.vertices.push_back(Vec3::Constant(1e300));
+    expect_same_topology(reference, build_tree<Aabb>(unused_vertex, settings), "unused vertex");
+    TriangleMesh far = mesh;
+    for (Vec3& v : far.vertices) v = v * 1e40 + Vec3(1e45, -3e44, 2e44);
+    const Tree<Aabb> far_tree = build_tree<Aabb>(far, settings);
+    expect_valid(far_tree, "far");
+  }
+}
+
 TEST(Build, RejectsBadMeshes) {
   TriangleMesh empty;
   EXPECT_THROW(build_tree<Aabb>(empty), Error);

@@ -1,11 +1,11 @@
 // Bottom-up boxtree construction (paper, Sections 2-3).
 //
-// Round structure (m active nodes, positions = their Morton order, renewed every round):
+// Round structure (m active nodes; each round orders them along the Morton curve of their box
+// centres):
 //   1. candidates = contracted mesh adjacency (facets sharing a vertex, welded by position)
-//                 + "near" pairs: the `near_window` neighbours on each side along the Morton curve
-//                 of the node centres;
-//   2. each candidate's key: the surface area (or volume) of the merged volume (for the oriented
-//      kinds with PairRanking::bounding_box, of the merged bounding box), computed once per pair;
+//                 + "near" pairs: the `near_window` neighbours on each side along the Morton curve;
+//   2. each candidate's key: the surface area (or volume) of the merged volume (for axis-aligned
+//      boxes, and the oriented kinds with PairRanking::bounding_box, of the merged bounding box);
 //   3. greedy maximal matching, cheapest first (ties broken by the nodes' smallest facet ids:
 //      deterministic), found without sorting (Preis' locally dominant pairs, see greedy_matching);
 //   4. matched pairs become parents, unmatched nodes are carried; adjacency is contracted.
@@ -14,6 +14,15 @@
 // Clustering for Bounding Volume Hierarchy Construction", TVCG 2018), which also merges each node
 // with its cheapest neighbour along a Morton order; here the neighbours include the mesh adjacency
 // and the matching is the paper's greedy one.
+// Memory traffic, not arithmetic, is what a large build spends its time on, so: one pass per
+// round builds the next round's candidate lists (contraction, Morton neighbours and each list's
+// cheapest partner at once); the lists hold 4-byte partner codes and no keys where a key is cheap
+// to compute again (boxes: a merged box's area costs less than storing and reading it); the
+// rounds' boxes are single precision (BoxF); a round's nodes keep the order of the previous
+// round's (parents where their first child was), so the lists of one round are read in order
+// while the next round's are written; arrays are reserved once at their largest size and the
+// lists are never zero-filled before being written (a large build's first touch of its pages,
+// the kernel zeroing them, costs as much as one of its passes).
 // Why the Morton pairs: the Morton order is a path through all active nodes, and a maximal
 // matching on a graph containing a path over all m nodes leaves an independent set of that path
 // unmatched, i.e. at most ceil(m/2) nodes, so each round pairs >= m/4 nodes and the height is at
@@ -25,12 +34,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <type_traits>
 
 #include "boxtree/detail/volume_kinds.h"
-#include "internal.h"
 #include "boxtree/planar/terrain.h"
 
 namespace boxtree {
@@ -38,31 +47,27 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
-// Lists of neighbours in CSR form: the neighbours of i are items[offsets[i] .. offsets[i + 1]),
-// sorted increasing, without duplicates or i itself.
-struct Adjacency {
-  std::vector<std::uint32_t> offsets;
-  std::vector<std::uint32_t> items;
-};
+// A hint to load the cache line at `address` ahead of its use.
+inline void prefetch([[maybe_unused]] const void* address) {
+#if defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(address);
+#endif
+}
 
-// Sorts [begin, end) and drops duplicates and `self`; returns the new end. The lists are short
-// (a dozen entries on meshes), where insertion sort beats std::sort.
-std::uint32_t* sort_unique_list(std::uint32_t* begin, std::uint32_t* end, std::uint32_t self) {
-  if (begin == end) return end;  // also a null `begin` (an empty vector's data()): no arithmetic on it
+// Sorts [begin, end) increasing (distinct values). The lists are short (a dozen entries on
+// meshes), where insertion sort beats std::sort.
+void sort_short(std::uint32_t* begin, std::uint32_t* end) {
+  if (end - begin < 2) return;  // also a null `begin`: no arithmetic on it
   if (end - begin > 48) {
     std::sort(begin, end);
-  } else {
-    for (std::uint32_t* i = begin + 1; i < end; ++i) {
-      const std::uint32_t x = *i;
-      std::uint32_t* j = i;
-      for (; j > begin && *(j - 1) > x; --j) *j = *(j - 1);
-      *j = x;
-    }
+    return;
   }
-  std::uint32_t* out = begin;
-  for (std::uint32_t* i = begin; i < end; ++i)
-    if (*i != self && (out == begin || *(out - 1) != *i)) *out++ = *i;
-  return out;
+  for (std::uint32_t* i = begin + 1; i < end; ++i) {
+    const std::uint32_t x = *i;
+    std::uint32_t* j = i;
+    for (; j > begin && *(j - 1) > x; --j) *j = *(j - 1);
+    *j = x;
+  }
 }
 
 // Welded vertex ids: bit-identical positions (and 0 / -0) share an id, numbered in order of
@@ -107,78 +112,84 @@ std::vector<VertexId> weld_vertices(const TriangleMesh& mesh) {
 }
 
 // Facets that share a vertex position (welding bit-identical coordinates, so triangle soups such
-// as PQP's env.obj still get their adjacency), as lists between positions: facet f is at
-// position[f]. A vertex shared by more than `max_fan` facets links them in a chain (in facet
-// order) instead of all pairs, bounding the work at high-valence vertices.
-Adjacency facet_adjacency(const TriangleMesh& mesh, int max_fan, const std::vector<std::uint32_t>& position) {
+// as PQP's env.obj still get their adjacency): the facets around each welded vertex (its fan),
+// from which the first round's candidates are gathered (gather_facet_neighbors).
+struct FacetFans {
+  std::vector<std::uint32_t> corners;   // 3 per facet: welded vertex ids, kNone for a repeated one
+  std::vector<std::uint32_t> offsets;   // the fan of welded vertex v: incident[offsets[v] .. offsets[v + 1])
+  std::vector<std::uint32_t> incident;  // positions of the fan's facets, in increasing facet id order
+  std::size_t bound = 0;                // an upper bound of the gathered neighbours, summed over facets
+};
+
+FacetFans facet_fans(const TriangleMesh& mesh, int max_fan, const std::vector<std::uint32_t>& position) {
   const std::size_t n = mesh.triangles.size();
-  const std::vector<VertexId> welded = weld_vertices(mesh);
-  std::size_t welded_count = 0;
-  for (VertexId w : welded) welded_count = std::max(welded_count, std::size_t(w) + 1);
-  const auto corners = [&](FacetId f, std::array<VertexId, 3>& out) {
-    // A facet repeating a vertex lists it once.
-    int k = 0;
-    for (int i = 0; i < 3; ++i) {
-      const VertexId w = welded[mesh.triangles[f][i]];
-      if ((k > 0 && out[0] == w) || (k > 1 && out[1] == w)) continue;
-      out[k++] = w;
-    }
-    return k;
-  };
-
-  // Incident facets per welded vertex (CSR), facets in increasing id order.
-  std::vector<std::uint32_t> offsets(welded_count + 1, 0);
-  std::array<VertexId, 3> c;
-  for (FacetId f = 0; f < n; ++f)
-    for (int k = 0, count = corners(f, c); k < count; ++k) ++offsets[c[k] + 1];
-  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  std::vector<FacetId> incident(offsets.back());
+  FacetFans fans;
   {
-    std::vector<std::uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-    for (FacetId f = 0; f < n; ++f)
-      for (int k = 0, count = corners(f, c); k < count; ++k) incident[cursor[c[k]]++] = f;
-  }
-
-  // Per position: the positions of the facets in its vertices' fans (or its chain neighbours).
-  std::vector<FacetId> facet_at(n);
-  for (FacetId f = 0; f < n; ++f) facet_at[position[f]] = f;
-  std::size_t bound = 0;
-  for (FacetId f = 0; f < n; ++f)
-    for (int k = 0, count = corners(f, c); k < count; ++k) bound += std::min<std::size_t>(offsets[c[k] + 1] - offsets[c[k]], 2 + std::size_t(max_fan));
-  Adjacency adj;
-  adj.offsets.resize(n + 1);
-  adj.items.resize(bound);
-  std::vector<std::uint32_t> stamp(n, kNone);
-  std::uint32_t* out = adj.items.data();
-  for (std::uint32_t p = 0; p < n; ++p) {
-    const FacetId f = facet_at[p];
-    std::uint32_t* begin = out;
-    adj.offsets[p] = std::uint32_t(begin - adj.items.data());
-    stamp[p] = p;
-    const auto add = [&](FacetId g) {
-      const std::uint32_t q = position[g];
-      if (stamp[q] == p) return;
-      stamp[q] = p;
-      *out++ = q;
-    };
-    for (int k = 0, count = corners(f, c); k < count; ++k) {
-      const std::uint32_t vb = offsets[c[k]], ve = offsets[c[k] + 1];
-      if (ve - vb <= std::uint32_t(max_fan)) {
-        for (std::uint32_t i = vb; i < ve; ++i) add(incident[i]);
-      } else {
-        const std::uint32_t i = std::uint32_t(std::lower_bound(incident.begin() + vb, incident.begin() + ve, f) - incident.begin());
-        if (i > vb) add(incident[i - 1]);
-        if (i + 1 < ve) add(incident[i + 1]);
-      }
+    const std::vector<VertexId> welded = weld_vertices(mesh);
+    fans.corners.resize(3 * n);
+    for (FacetId f = 0; f < n; ++f) {
+      // A facet repeating a vertex lists it once.
+      const VertexId a = welded[mesh.triangles[f][0]], b = welded[mesh.triangles[f][1]], c = welded[mesh.triangles[f][2]];
+      std::uint32_t* const out = &fans.corners[3 * std::size_t(f)];
+      out[0] = a;
+      out[1] = b == a ? kNone : b;
+      out[2] = c == a || c == b ? kNone : c;
     }
-    out = sort_unique_list(begin, out, p);
   }
-  adj.items.resize(std::size_t(out - adj.items.data()));
-  adj.offsets[n] = std::uint32_t(adj.items.size());
-  return adj;
+  std::size_t welded_count = 0;
+  for (std::uint32_t w : fans.corners)
+    if (w != kNone) welded_count = std::max(welded_count, std::size_t(w) + 1);
+  fans.offsets.assign(welded_count + 1, 0);
+  for (std::uint32_t w : fans.corners)
+    if (w != kNone) ++fans.offsets[w + 1];
+  std::partial_sum(fans.offsets.begin(), fans.offsets.end(), fans.offsets.begin());
+  fans.incident.resize(fans.offsets.back());
+  {
+    std::vector<std::uint32_t> cursor(fans.offsets.begin(), fans.offsets.end() - 1);
+    for (FacetId f = 0; f < n; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t w = fans.corners[3 * std::size_t(f) + k];
+        if (w == kNone) continue;
+        fans.incident[cursor[w]++] = position[f];
+      }
+  }
+  for (std::uint32_t w : fans.corners)
+    if (w != kNone) fans.bound += std::min<std::size_t>(fans.offsets[w + 1] - fans.offsets[w], 2 + std::size_t(max_fan));
+  return fans;
 }
 
-// 30-bit Morton code of a point quantized to 10 bits per axis inside [lo, lo + 1024 / scale].
+// Appends to `out` the positions of the facets in the fans of facet f's vertices (or, for a
+// vertex shared by more than `max_fan` facets, its chain neighbours there: the facets before and
+// after it in facet order, bounding the work at high-valence vertices), each once, without
+// position p (f's): stamp[q] == p marks those already listed; facet_at: the facet at each position.
+// Returns the new end.
+std::uint32_t* gather_facet_neighbors(const FacetFans& fans, FacetId f, std::uint32_t p, int max_fan,
+                                      const std::uint32_t* facet_at, std::uint32_t* stamp, std::uint32_t* out) {
+  stamp[p] = p;
+  const auto add = [&](std::uint32_t q) {
+    if (stamp[q] == p) return;
+    stamp[q] = p;
+    *out++ = q;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const std::uint32_t w = fans.corners[3 * std::size_t(f) + k];
+    if (w == kNone) continue;
+    const std::uint32_t vb = fans.offsets[w], ve = fans.offsets[w + 1];
+    if (ve - vb <= std::uint32_t(max_fan)) {
+      for (std::uint32_t i = vb; i < ve; ++i) add(fans.incident[i]);
+    } else {
+      const std::uint32_t i = std::uint32_t(
+          std::partition_point(fans.incident.begin() + vb, fans.incident.begin() + ve,
+                               [&](std::uint32_t q) { return facet_at[q] < f; }) -
+          fans.incident.begin());
+      if (i > vb) add(fans.incident[i - 1]);
+      if (i + 1 < ve) add(fans.incident[i + 1]);
+    }
+  }
+  return out;
+}
+
+// A 10-bit coordinate spread to every third bit: the bits of 30-bit Morton codes.
 std::uint32_t spread_bits(std::uint32_t x) {
   x &= 0x3ff;
   x = (x | x << 16) & 0x030000ffu;
@@ -186,15 +197,6 @@ std::uint32_t spread_bits(std::uint32_t x) {
   x = (x | x << 4) & 0x030c30c3u;
   x = (x | x << 2) & 0x09249249u;
   return x;
-}
-
-std::uint32_t morton_code(const Vec3& p, const Vec3& lo, const Vec3& scale) {
-  std::uint32_t code = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Real q = std::clamp((p[i] - lo[i]) * scale[i], Real(0), Real(0x3ff));
-    code |= spread_bits(std::uint32_t(q)) << i;
-  }
-  return code;
 }
 
 // Stable LSD radix sort of (code, index) by code, 10 bits per pass: the Morton order with ties
@@ -212,67 +214,142 @@ void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& keys,
 }
 
 // The rank of a candidate pair: its cost, then (volume cost only) its surface area, as flat
-// volumes tie at volume 0. Pairs of equal keys are ordered by their node positions.
+// volumes tie at volume 0. Pairs of equal keys are ordered by their nodes' tie order. Both floats
+// are packed into one integer that orders as the pair (cost, tie) does, compared in one step.
 struct Key {
-  float cost;
-  float tie;
-  bool operator<(const Key& o) const { return cost < o.cost || (cost == o.cost && tie < o.tie); }
-  bool operator==(const Key& o) const { return cost == o.cost && tie == o.tie; }
+  std::uint64_t bits;
+
+  Key() = default;
+  Key(float cost, float tie) : bits(std::uint64_t(ordered_bits(cost)) << 32 | ordered_bits(tie)) {}
+  bool operator<(const Key& o) const { return bits < o.bits; }
+  bool operator==(const Key& o) const { return bits == o.bits; }
+
+ private:
+  // Unsigned integers in the order of the floats (not NaN; -0 as +0).
+  static std::uint32_t ordered_bits(float x) {
+    x += 0.0f;
+    std::uint32_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b & 0x80000000u ? ~b : b | 0x80000000u;
+  }
 };
 
-// One round's candidate graph: for node position u, slots [offsets[u], offsets[u + 1]) hold its
-// candidate partners (sorted increasing) and the pair's key, the same key in both nodes' slots.
-struct Candidates {
+// A round's candidates: for node position u, slots [offsets[u], offsets[u + 1]) hold its
+// candidate partners q, as codes: 2 q, or 2 q + 1 for a Morton neighbour that is not a mesh
+// neighbour (such pairs are not carried to the next round). Keys are stored (the same key in both
+// nodes' lists) only where they are costly to compute (oriented volumes fitted per candidate);
+// there each list keeps its partners above u sorted increasing, otherwise lists are unordered
+// and a key is computed again where it is needed, which costs less than storing it.
+struct CandidateLists {
   std::vector<std::uint32_t> offsets;
-  std::vector<std::uint32_t> neighbor;
-  std::vector<Key> key;
-  std::vector<std::uint32_t> reverse;  // fill cursor for the lower half of each list
+  std::unique_ptr<std::uint32_t[]> codes;  // not initialized: every slot is written before it is read
+  std::unique_ptr<Key[]> keys;             // only with stored keys
+  std::size_t capacity = 0;
+  // While lists with stored keys are built: the slot of the next partner above u still to be read.
+  std::vector<std::uint32_t> cursor;
+  // The cheapest partner of each node (kNone for an empty list), updated by the matching.
+  std::vector<std::uint32_t> best;
+
+  // Empty lists for m nodes with room for `slots` candidates in all.
+  void reset(std::uint32_t m, std::size_t slots, bool store_keys) {
+    offsets.resize(std::size_t(m) + 1);
+    offsets[0] = 0;
+    best.resize(m);
+    if (store_keys) cursor.resize(m);
+    if (slots > capacity) {
+      codes.reset();
+      keys.reset();
+      codes.reset(new std::uint32_t[slots]);
+      if (store_keys) keys.reset(new Key[slots]);
+      capacity = slots;
+    }
+  }
+};
+
+// The axis-aligned box the rounds keep per node, to rank pairs by their merged box and to sort
+// nodes along the Morton curve (the tree's volumes are computed exactly afterwards): in single
+// precision, half the bytes of an Aabb, so that more of a node's neighbours share its cache
+// lines. Coordinates are relative to the mesh's bounding box and scaled by a power of two to
+// about [0, 1] (in float range for any valid mesh); where they are exact in float (CAD models'
+// round numbers), the ranks and the order are those of the double-precision boxes, so ties stay
+// ties. Sizes are computed in double, as for an Aabb.
+struct BoxF {
+  float min[3];
+  float max[3];
+
+  static BoxF enclosing(const BoxF& a, const BoxF& b) {
+    BoxF r;
+    for (int i = 0; i < 3; ++i) {
+      r.min[i] = std::min(a.min[i], b.min[i]);
+      r.max[i] = std::max(a.max[i], b.max[i]);
+    }
+    return r;
+  }
+  Real extent(int i) const { return Real(max[i]) - Real(min[i]); }
+  // As surface_area(Aabb) and volume(Aabb), operation for operation.
+  Real area() const { return 2 * (extent(0) * extent(1) + extent(1) * extent(2) + extent(2) * extent(0)); }
+  Real volume() const { return extent(0) * extent(1) * extent(2); }
+  Real center(int i) const { return (Real(min[i]) + Real(max[i])) * Real(0.5); }
 };
 
 // The greedy matching (take candidates cheapest first, skip those touching a matched node)
 // without sorting any candidates: with a strict total order on candidates (key, then the pair of
-// positions), greedy equals repeatedly matching "locally dominant" pairs, each the cheapest
+// the nodes' tie orders), greedy equals repeatedly matching "locally dominant" pairs, each the cheapest
 // remaining candidate of both its nodes (Preis, STACS 1999). A node's best remaining partner is
 // found by a scan of its list and kept until that partner is matched; a node whose best partner
 // prefers someone else defers to that partner first, so chains follow strictly decreasing keys
 // and end in a mutual pair. The same result as the global sort, in O(E) scans on meshes.
-void greedy_matching(const Candidates& c, const std::vector<std::uint32_t>& order, std::size_t m,
-                     std::vector<std::uint32_t>& partner, std::vector<std::uint32_t>& best_slot,
-                     std::vector<std::uint32_t>& stack) {
+// `key(slot, u, v)` is the key of candidate slot `slot` of u, partner v; `c.best` holds each
+// node's cheapest partner on entry.
+template <class KeyOf>
+void greedy_matching(CandidateLists& c, const KeyOf& key, const std::vector<std::uint32_t>& order, std::size_t m,
+                     std::vector<std::uint32_t>& partner, std::vector<std::uint32_t>& stack) {
   partner.assign(m, kNone);
-  best_slot.assign(m, kNone);
+  const std::uint32_t* const codes = c.codes.get();
+  std::vector<std::uint32_t>& best_partner = c.best;
   // The best remaining partner of u, or kNone. Pairs of equal keys are ordered by their nodes'
   // `order` (smaller, then larger), i.e. for a fixed u by the partner's order.
   auto best = [&](std::uint32_t u) {
-    std::uint32_t s = best_slot[u];
-    if (s != kNone && partner[c.neighbor[s]] == kNone) return c.neighbor[s];
-    s = kNone;
+    std::uint32_t s_partner = best_partner[u];
+    if (s_partner == kNone || partner[s_partner] == kNone) return s_partner;
+    std::uint32_t s = kNone;
+    s_partner = kNone;
+    Key s_key{};
     for (std::uint32_t i = c.offsets[u], end = c.offsets[u + 1]; i < end; ++i) {
-      if (partner[c.neighbor[i]] != kNone) continue;
-      if (s == kNone || c.key[i] < c.key[s] || (c.key[i] == c.key[s] && order[c.neighbor[i]] < order[c.neighbor[s]])) s = i;
+      const std::uint32_t v = codes[i] >> 1;
+      if (partner[v] != kNone) continue;
+      const Key k = key(i, u, v);
+      if (s == kNone || k < s_key || (k == s_key && order[v] < order[s_partner])) {
+        s = i;
+        s_partner = v;
+        s_key = k;
+      }
     }
-    best_slot[u] = s;
-    return s == kNone ? kNone : c.neighbor[s];
+    best_partner[u] = s_partner;
+    return s_partner;
   };
   stack.clear();
-  for (std::size_t u = m; u-- > 0;) stack.push_back(std::uint32_t(u));
-  while (!stack.empty()) {
-    const std::uint32_t u = stack.back();
-    if (partner[u] != kNone) {
-      stack.pop_back();
-      continue;
-    }
-    const std::uint32_t v = best(u);
-    if (v == kNone) {
-      stack.pop_back();
-      continue;
-    }
-    if (best(v) == u) {
-      stack.pop_back();
-      partner[u] = v;
-      partner[v] = u;
-    } else {
-      stack.push_back(v);  // v prefers a cheaper pair: settle v first, then come back to u
+  for (std::uint32_t start = 0; start < m; ++start) {
+    if (partner[start] != kNone) continue;
+    stack.push_back(start);
+    while (!stack.empty()) {
+      const std::uint32_t u = stack.back();
+      if (partner[u] != kNone) {
+        stack.pop_back();
+        continue;
+      }
+      const std::uint32_t v = best(u);
+      if (v == kNone) {
+        stack.pop_back();
+        continue;
+      }
+      if (best(v) == u) {
+        stack.pop_back();
+        partner[u] = v;
+        partner[v] = u;
+      } else {
+        stack.push_back(v);  // v prefers a cheaper pair: settle v first, then come back to u
+      }
     }
   }
 }
@@ -386,31 +463,28 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   if (settings.near_window < 1) throw Error("build_tree: near_window must be at least 1");
   if (settings.max_neighbors < 2) throw Error("build_tree: max_neighbors must be at least 2");
 
-  // Nodes in build order: leaves 0..n-1 (node i is facet i), parents appended, children
-  // first/second. The rounds work on axis-aligned bounding boxes only (for boxes, the volumes
+  // Nodes in build order: leaves 0..n-1 (node i is facet i), parents appended, children in
+  // `children`. The rounds work on axis-aligned bounding boxes only (for boxes, the volumes
   // themselves): volumes of another kind are fitted during the rounds only for
   // PairRanking::merged_volume, which ranks candidates by them; otherwise once per parent, in the
   // final layout.
   constexpr bool kIsAabb = std::is_same_v<Volume, Aabb>;
   const bool fit_during_rounds = !kIsAabb && settings.ranking == PairRanking::merged_volume;
   std::vector<Volume> volumes;  // by build index, when fit_during_rounds
-  std::vector<std::uint32_t> first(n, kNone), second(n, kNone);
-  first.reserve(2 * n - 1);
-  second.reserve(2 * n - 1);
+  // The children of parent b (build index n + k): children[2 k], children[2 k + 1].
+  std::vector<std::uint32_t> children;
+  children.reserve(2 * (n - 1));
   if (fit_during_rounds) {
     volumes.reserve(2 * n - 1);
     for (FacetId f = 0; f < n; ++f) volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
   }
-  std::vector<Aabb> leaf_boxes(n);
-  Aabb bounds;
-  for (FacetId f = 0; f < n; ++f) {
-    leaf_boxes[f] = Aabb::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
-    bounds = Aabb::enclosing(bounds, leaf_boxes[f]);
-  }
+  Aabb bounds;  // of the facets (a vertex that no facet uses is not checked by validate_mesh)
+  for (FacetId f = 0; f < n; ++f)
+    for (int k = 0; k < 3; ++k) bounds.expand(mesh.corner(f, k));
 
   // Keys are floats, costs divided by the mesh's size (its largest extent squared for areas,
   // cubed for volumes) to stay in float range; rounding to float keeps the order of costs up to
-  // ties, which the positions break.
+  // ties, which the nodes' tie orders break.
   const bool volume_cost = settings.cost == MergeCost::volume;
   const Real max_extent = bounds.extent().maxCoeff();
   const Real inv_extent = max_extent > 0 && std::isfinite(1 / max_extent) ? 1 / max_extent : 1;
@@ -420,15 +494,39 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     if (volume_cost) return {float(vol * volume_scale), float(area * area_scale)};
     return {float(area * area_scale), 0.0f};
   };
+  // The frame of the rounds' boxes (BoxF): x -> (x - origin) * unit, unit a power of two; the
+  // keys' scales divided by unit^2 and unit^3 (exactly) to give the same keys.
+  const Vec3 origin = bounds.min;
+  const Real unit = max_extent > 0 ? std::ldexp(Real(1), -std::ilogb(max_extent)) : Real(1);
+  const Real box_area_scale = area_scale / (unit * unit);
+  const Real box_volume_scale = volume_scale / (unit * unit * unit);
+  const auto round_box = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Aabb box = Aabb::from_triangle(a, b, c);
+    BoxF r;
+    for (int i = 0; i < 3; ++i) {
+      r.min[i] = float((box.min[i] - origin[i]) * unit);
+      r.max[i] = float((box.max[i] - origin[i]) * unit);
+    }
+    return r;
+  };
 
-  // Per position (copied in Morton order each round, so that a node's candidates are near in
-  // memory): the node, its bounding box, its subtree height.
+  // The active nodes by position: in the first round the Morton order of the facets, then each
+  // round's parents and carried nodes in the order of their first member's position (so that
+  // nodes stay near their neighbours in memory and the lists of one round are read in order
+  // while the next round's are built). Per position: the node, its box, its rank in the round's
+  // Morton order (which orders the members of a pair and gives the Morton neighbours).
   std::vector<std::uint32_t> active, next_active;
-  std::vector<Aabb> active_box, next_box;
-  std::vector<int> active_height, next_height;
+  std::vector<BoxF> active_box, next_box;
+  std::vector<std::uint32_t> active_rank, next_rank;
   // Tie order: the smallest facet id below the node (as if positions kept the facets' order).
   std::vector<std::uint32_t> active_order, next_order;
-  // The rank of merging the nodes at positions p < q.
+  // The rank of merging the nodes at positions p and q: of their boxes (symmetric in p and q),
+  const auto box_pair_key = [&](std::uint32_t p, std::uint32_t q) -> Key {
+    const BoxF merged = BoxF::enclosing(active_box[p], active_box[q]);
+    if (volume_cost) return {float(merged.volume() * box_volume_scale), float(merged.area() * box_area_scale)};
+    return {float(merged.area() * box_area_scale), 0.0f};
+  };
+  // and of any kind, p's Morton rank below q's (fitting is not symmetric).
   const auto pair_key = [&](std::uint32_t p, std::uint32_t q) -> Key {
     if constexpr (!kIsAabb) {
       if (fit_during_rounds) {
@@ -436,205 +534,283 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
         return make_key(surface_area(merged), volume_cost ? volume(merged) : 0);
       }
     }
-    const Aabb merged = Aabb::enclosing(active_box[p], active_box[q]);
-    return make_key(surface_area(merged), volume_cost ? volume(merged) : 0);
+    return box_pair_key(p, q);
   };
 
   BuildStats local;
-  // Positions are the Morton order of the nodes' box centres, renewed every round; the mesh
-  // adjacency (contracted) is kept between positions.
-  // morton[i] = (code, index into boxes) in Morton order of the boxes' centres.
+  // Each round orders the nodes along the Morton curve of their box centres; the mesh adjacency
+  // (contracted) is kept between positions.
+  // morton[i] = (code, index into boxes) in Morton order of the boxes' centres, ties in the order
+  // of tie(index) (increasing).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> morton, morton_scratch;
-  const auto morton_order = [&](const Aabb* boxes, std::uint32_t count) {
-    Aabb centres;
-    for (std::uint32_t i = 0; i < count; ++i) centres.expand(boxes[i].center());
-    const Vec3 extent = centres.extent();
-    Vec3 scale;
-    for (int i = 0; i < 3; ++i) scale[i] = extent[i] > 0 ? Real(0x3ff) / extent[i] : 0;
+  const auto morton_order = [&](const BoxF* boxes, std::uint32_t count, const auto& tie) {
+    Real lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (std::uint32_t i = 0; i < count; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const Real c = boxes[i].center(k);
+        lo[k] = std::min(lo[k], c);
+        hi[k] = std::max(hi[k], c);
+      }
+    Real scale[3];
+    for (int k = 0; k < 3; ++k) scale[k] = hi[k] - lo[k] > 0 ? Real(0x3ff) / (hi[k] - lo[k]) : 0;
+    morton.reserve(count);
     morton.resize(count);
-    for (std::uint32_t i = 0; i < count; ++i) morton[i] = {morton_code(boxes[i].center(), centres.min, scale), i};
+    for (std::uint32_t i = 0; i < count; ++i) {
+      std::uint32_t code = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Real q = std::clamp((boxes[i].center(k) - lo[k]) * scale[k], Real(0), Real(0x3ff));
+        code |= spread_bits(std::uint32_t(q)) << k;
+      }
+      morton[i] = {code, i};
+    }
     radix_sort(morton, morton_scratch);
+    for (std::uint32_t i = 0; i + 1 < count;) {  // runs of equal codes (short), sorted by `tie`
+      std::uint32_t j = i + 1;
+      while (j < count && morton[j].first == morton[i].first) ++j;
+      if (j - i > 1)
+        std::sort(morton.begin() + i, morton.begin() + j, [&](const auto& a, const auto& b) { return tie(a.second) < tie(b.second); });
+      i = j;
+    }
   };
 
-  Adjacency adjacency, next_adjacency;
+  std::vector<std::uint32_t> position(n);  // of facet f
+  // Room for the first round (the largest); the arrays are reused by the later rounds.
+  for (auto* v : {&active, &next_active, &active_rank, &next_rank, &active_order, &next_order}) v->reserve(n);
   {
-    morton_order(leaf_boxes.data(), std::uint32_t(n));
-    std::vector<std::uint32_t> position(n);
+    next_box.resize(n);
+    for (FacetId f = 0; f < n; ++f) next_box[f] = round_box(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+    morton_order(next_box.data(), std::uint32_t(n), [](std::uint32_t f) { return f; });
     active.resize(n);
     active_box.resize(n);
-    active_height.assign(n, 0);
+    active_rank.resize(n);
     active_order.resize(n);
     for (std::uint32_t p = 0; p < n; ++p) {
       active[p] = morton[p].second;
       active_order[p] = active[p];
-      active_box[p] = leaf_boxes[active[p]];
+      active_box[p] = next_box[active[p]];
+      active_rank[p] = p;
       position[morton[p].second] = p;
     }
-    leaf_boxes = std::vector<Aabb>();
-    adjacency = facet_adjacency(mesh, settings.max_neighbors, position);
   }
-  Candidates cand;
-  std::vector<std::uint32_t> partner, best_slot, stack, group, group_members, rank, stamp;
+
+  // The candidate lists of the current round (positions 0..m-1) and those being built for the
+  // next one.
+  CandidateLists current, next;
+  std::vector<std::uint32_t> stamp;
   const std::uint32_t window = std::uint32_t(settings.near_window);
+  const bool store_keys = fit_during_rounds;
+  // The key of candidate `slot` (a slot of u's list, partner v) once the lists are built.
+  const auto candidate_key = [&](const CandidateLists& lists, std::uint32_t slot, std::uint32_t u, std::uint32_t v) {
+    return store_keys ? lists.keys[slot] : box_pair_key(u, v);
+  };
+  // Builds list i of `lists` (whose lists below i are built) from the codes 2 q of the mesh
+  // neighbours q gathered in list i's slots [offsets[i], offsets[i] + count) (distinct, without i,
+  // stamp[q] == i): adds the Morton neighbours not already there and keeps the list's cheapest
+  // partner (the matching's first choice). With stored keys, computes the keys of the partners above
+  // i and reads those below i from their lists (where partners above are read in increasing
+  // order: each list keeps its upper part sorted and a cursor in it).
+  // `by_rank`: the positions in Morton order (null: the identity), `rank`: i's rank there.
+  const auto build_list = [&](CandidateLists& lists, std::uint32_t i, std::uint32_t m, std::uint32_t count,
+                              const std::pair<std::uint32_t, std::uint32_t>* by_rank, std::uint32_t rank) {
+    const std::uint32_t first_slot = lists.offsets[i];
+    std::uint32_t* const begin = lists.codes.get() + first_slot;
+    std::uint32_t* end = begin + count;
+    for (std::uint32_t k = rank >= window ? rank - window : 0, k_end = std::min(m, rank + window + 1); k < k_end; ++k) {
+      const std::uint32_t w = by_rank ? by_rank[k].second : k;
+      if (k != rank && stamp[w] != i) *end++ = 2 * w + 1;
+    }
+    lists.offsets[i + 1] = first_slot + std::uint32_t(end - begin);
+    std::uint32_t best = kNone;
+    Key best_key{};
+    const auto consider = [&](const std::uint32_t* c, const Key& key) {
+      const std::uint32_t q = *c >> 1;
+      if (best == kNone || key < best_key || (key == best_key && active_order[q] < active_order[best])) {
+        best = q;
+        best_key = key;
+      }
+    };
+    if (!store_keys) {
+      for (const std::uint32_t* c = begin; c < end; ++c) {
+        const std::uint32_t q = *c >> 1;
+        consider(c, box_pair_key(i, q));
+      }
+    } else {
+      std::uint32_t* const middle = std::partition(begin, end, [i](std::uint32_t code) { return code < 2 * i; });
+      sort_short(middle, end);
+      Key* const keys = lists.keys.get() + first_slot;
+      for (const std::uint32_t* c = begin; c < middle; ++c) {
+        const std::uint32_t r = lists.cursor[*c >> 1]++;
+        BOXTREE_ASSERT(lists.codes[r] >> 1 == i, "candidate lists are symmetric");
+        keys[c - begin] = lists.keys[r];
+        consider(c, keys[c - begin]);
+      }
+      lists.cursor[i] = first_slot + std::uint32_t(middle - begin);
+      for (const std::uint32_t* c = middle; c < end; ++c) {
+        const std::uint32_t q = *c >> 1;
+        keys[c - begin] = active_rank[q] < active_rank[i] ? pair_key(q, i) : pair_key(i, q);
+        consider(c, keys[c - begin]);
+      }
+    }
+    lists.best[i] = best;
+  };
+
+  {
+    // First round: the facets' mesh neighbours.
+    const FacetFans fans = facet_fans(mesh, settings.max_neighbors, position);
+    if (n > 1) {
+      current.reset(std::uint32_t(n), fans.bound + 2 * std::size_t(window) * n, store_keys);
+      stamp.swap(position);  // no longer needed: its pages serve again
+      stamp.assign(n, kNone);
+      for (std::uint32_t p = 0; p < n; ++p) {
+        // Prefetch the fans a few positions ahead (facets in Morton order are scattered in the
+        // mesh's order): the corners, then their fans' offsets, then the fans.
+        if (p + 16 < n) prefetch(&fans.corners[3 * std::size_t(active[p + 16])]);
+        if (p + 8 < n) {
+          const std::uint32_t* c = &fans.corners[3 * std::size_t(active[p + 8])];
+          for (int k = 0; k < 3; ++k)
+            if (c[k] != kNone) prefetch(&fans.offsets[c[k]]);
+        }
+        if (p + 4 < n) {
+          const std::uint32_t* c = &fans.corners[3 * std::size_t(active[p + 4])];
+          for (int k = 0; k < 3; ++k)
+            if (c[k] != kNone) prefetch(&fans.incident[fans.offsets[c[k]]]);
+          prefetch(&active_box[p + 4]);
+        }
+        std::uint32_t* const begin = current.codes.get() + current.offsets[p];
+        const std::uint32_t* end = gather_facet_neighbors(fans, active[p], p, settings.max_neighbors, active.data(), stamp.data(), begin);
+        const std::uint32_t count = std::uint32_t(end - begin);
+        for (std::uint32_t k = 0; k < count; ++k) begin[k] *= 2;
+        build_list(current, p, std::uint32_t(n), count, nullptr, p);
+      }
+    }
+  }
+  std::vector<std::uint32_t> partner, stack, group, group_first;
   std::uint32_t next_node = std::uint32_t(n);
+  group_first.reserve(n);
   while (active.size() > 1) {
     const std::uint32_t m = std::uint32_t(active.size());
     ++local.rounds;
+    local.candidate_pairs += current.offsets[m] / 2;
 
-    // 1. Candidates of each position: its contracted adjacency and its `window` neighbours on
-    // each side in the Morton order, merged into one sorted list.
-    cand.offsets.resize(m + 1);
-    cand.neighbor.resize(adjacency.items.size() + std::size_t(m) * 2 * window);
-    std::uint32_t write = 0;
-    for (std::uint32_t p = 0; p < m; ++p) {
-      cand.offsets[p] = write;
-      const std::uint32_t* a = adjacency.items.data() + adjacency.offsets[p];
-      const std::uint32_t* a_end = adjacency.items.data() + adjacency.offsets[p + 1];
-      std::uint32_t w = p >= window ? p - window : 0;
-      const std::uint32_t w_end = std::min(m, p + window + 1);
-      std::uint32_t* out = cand.neighbor.data() + write;
-      while (a < a_end || w < w_end) {
-        if (w == p) {
-          ++w;
-          continue;
-        }
-        std::uint32_t x;
-        if (w >= w_end || (a < a_end && *a < w)) {
-          x = *a++;
-        } else {
-          if (a < a_end && *a == w) ++a;
-          x = w++;
-        }
-        *out++ = x;
-      }
-      write = std::uint32_t(out - cand.neighbor.data());
-    }
-    cand.offsets[m] = write;
-    cand.neighbor.resize(write);
-    local.candidate_pairs += write / 2;
+    // Greedy maximal matching, cheapest first.
+    greedy_matching(
+        current, [&](std::uint32_t slot, std::uint32_t u, std::uint32_t v) { return candidate_key(current, slot, u, v); },
+        active_order, m, partner, stack);
 
-    // 2. Each pair's key, computed once (by the node at the smaller position) and stored in both
-    // lists: the lower part of each list is filled in increasing order of the partner.
-    cand.key.resize(write);
-    cand.reverse.assign(cand.offsets.begin(), cand.offsets.end() - 1);
-    for (std::uint32_t p = 0; p < m; ++p) {
-      for (std::uint32_t i = cand.offsets[p], end = cand.offsets[p + 1]; i < end; ++i) {
-        const std::uint32_t q = cand.neighbor[i];
-        if (q < p) continue;
-        const Key key = pair_key(p, q);
-        cand.key[i] = key;
-        const std::uint32_t r = cand.reverse[q]++;
-        BOXTREE_ASSERT(cand.neighbor[r] == p, "candidate lists are symmetric");
-        cand.key[r] = key;
-      }
-    }
-
-    // 3. Greedy maximal matching, cheapest first.
-    greedy_matching(cand, active_order, m, partner, best_slot, stack);
-
-    // 4. Parents for pairs, carried nodes as they are (group g, in the order of their first
-    // position), then the groups in Morton order as the next round's positions.
+    // Parents for pairs (children in Morton order), carried nodes as they are: group g, the next
+    // round's position, in the order of the groups' first positions.
     group.assign(m, kNone);
-    group_members.clear();
+    group_first.clear();
     next_active.clear();
     next_box.clear();
-    next_height.clear();
     next_order.clear();
     for (std::uint32_t p = 0; p < m; ++p) {
       if (group[p] != kNone) continue;
       const std::uint32_t q = partner[p];
       const std::uint32_t g = std::uint32_t(next_active.size());
       group[p] = g;
-      group_members.push_back(p);
-      group_members.push_back(q);
+      group_first.push_back(p);
       if (q == kNone) {
         next_active.push_back(active[p]);
         next_box.push_back(active_box[p]);
-        next_height.push_back(active_height[p]);
         next_order.push_back(active_order[p]);
         continue;
       }
       group[q] = g;
-      const std::uint32_t a = active[p], b = active[q];
+      const bool p_first = active_rank[p] < active_rank[q];
+      const std::uint32_t a = active[p_first ? p : q], b = active[p_first ? q : p];
       if (fit_during_rounds) volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
-      first.push_back(a);
-      second.push_back(b);
+      children.push_back(a);
+      children.push_back(b);
       next_active.push_back(next_node++);
-      next_box.push_back(Aabb::enclosing(active_box[p], active_box[q]));
-      next_height.push_back(1 + std::max(active_height[p], active_height[q]));
+      next_box.push_back(BoxF::enclosing(active_box[p], active_box[q]));
       next_order.push_back(std::min(active_order[p], active_order[q]));
     }
     const std::uint32_t next_m = std::uint32_t(next_active.size());
     BOXTREE_ASSERT(next_m < m, "a round always pairs at least one node");
     if (next_m == 1) {
       active.swap(next_active);
-      active_height.swap(next_height);
       break;
     }
-    morton_order(next_box.data(), next_m);
-    rank.resize(next_m);
-    for (std::uint32_t i = 0; i < next_m; ++i) rank[morton[i].second] = i;
-    for (std::uint32_t p = 0; p < m; ++p) group[p] = rank[group[p]];  // old position -> new position
-    stamp.assign(next_m, kNone);
+    // Morton order of the groups, ties as if the groups were numbered in Morton order of their
+    // first members (as they would be with positions in Morton order).
+    morton_order(next_box.data(), next_m, [&](std::uint32_t g) {
+      const std::uint32_t p = group_first[g], q = partner[p];
+      return q == kNone ? active_rank[p] : std::min(active_rank[p], active_rank[q]);
+    });
+    next_rank.resize(next_m);
+    for (std::uint32_t i = 0; i < next_m; ++i) next_rank[morton[i].second] = i;
 
-    // Contracted adjacency: a group's neighbours are its members' neighbours' groups.
-    next_adjacency.offsets.resize(next_m + 1);
-    next_adjacency.items.resize(adjacency.items.size());
-    write = 0;
-    active.resize(next_m);
-    active_box.resize(next_m);
-    active_height.resize(next_m);
-    active_order.resize(next_m);
+    // The next round's lists: a group's mesh neighbours are its members' mesh neighbours' groups.
+    // Morton neighbours and keys need the next round's boxes, ranks and orders.
+    active.swap(next_active);
+    active_box.swap(next_box);
+    active_rank.swap(next_rank);
+    active_order.swap(next_order);
+    stamp.assign(next_m, kNone);
+    next.reset(next_m, current.offsets[m] + 2 * std::size_t(window) * next_m, store_keys);
     for (std::uint32_t i = 0; i < next_m; ++i) {
-      const std::uint32_t g = morton[i].second;
-      active[i] = next_active[g];
-      active_box[i] = next_box[g];
-      active_height[i] = next_height[g];
-      active_order[i] = next_order[g];
-      next_adjacency.offsets[i] = write;
-      std::uint32_t* begin = next_adjacency.items.data() + write;
+      std::uint32_t* const begin = next.codes.get() + next.offsets[i];
       std::uint32_t* end = begin;
       stamp[i] = i;  // drops i itself
-      for (int k = 0; k < 2; ++k) {
-        const std::uint32_t p = group_members[2 * g + k];
+      for (const std::uint32_t p : {group_first[i], partner[group_first[i]]}) {
         if (p == kNone) break;
-        for (std::uint32_t j = adjacency.offsets[p]; j < adjacency.offsets[p + 1]; ++j) {
-          const std::uint32_t r = group[adjacency.items[j]];
-          if (stamp[r] == i) continue;
-          stamp[r] = i;
-          *end++ = r;
+        for (std::uint32_t j = current.offsets[p], j_end = current.offsets[p + 1]; j < j_end; ++j) {
+          // Without branches (taken at random): skip Morton neighbours only and groups listed.
+          const std::uint32_t code = current.codes[j];
+          const std::uint32_t r = group[code >> 1];
+          const bool add = !(code & 1) & (stamp[r] != i);
+          stamp[r] = add ? i : stamp[r];
+          *end = 2 * r;
+          end += add;
         }
       }
-      write = std::uint32_t(sort_unique_list(begin, end, i) - next_adjacency.items.data());
+      build_list(next, i, next_m, std::uint32_t(end - begin), morton.data(), active_rank[i]);
     }
-    next_adjacency.offsets[next_m] = write;
-    next_adjacency.items.resize(write);
-    std::swap(adjacency, next_adjacency);
+    std::swap(current, next);
   }
 
-  // Final layout: depth-first from the root, the two children of a node in adjacent slots;
-  // children have larger slots than their parent, so a backward pass fits parents after their
-  // children.
-  const std::size_t node_count = first.size();
-  BOXTREE_ASSERT(node_count == 2 * n - 1, "a binary tree over n leaves has 2n-1 nodes");
+  // Final layout: depth-first from the root, the two children of a node in adjacent slots after
+  // their parent; a parent's volume is computed (or copied) once its children's are, in the
+  // same traversal.
+  const std::size_t node_count = 2 * n - 1;
+  BOXTREE_ASSERT(children.size() == 2 * (n - 1), "a binary tree over n leaves has n-1 parents");
   const std::uint32_t leaf_flag = Tree<Volume>::kLeafFlag;
-  std::vector<std::uint32_t> out_links, out_nodes;
-  detail::depth_first_order(first, second, active[0], node_count, n, leaf_flag, out_links, out_nodes);
+  std::vector<std::uint32_t> out_links(node_count);
   std::vector<Volume> out_volumes(node_count);
-  if (fit_during_rounds) {
-    for (std::size_t slot = 0; slot < node_count; ++slot) out_volumes[slot] = volumes[out_nodes[slot]];
-  } else {
-    for (std::size_t slot = node_count; slot-- > 0;) {
-      const std::uint32_t link = out_links[slot];
-      if (link & leaf_flag) {
-        const FacetId f = link & ~leaf_flag;
-        out_volumes[slot] = Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+  int height = 0;
+  {
+    struct Visit {
+      std::uint32_t node, slot, depth;
+      bool children_done;
+    };
+    std::vector<Visit> visits{{active[0], 0, 0, false}};
+    std::uint32_t next_slot = 1;
+    while (!visits.empty()) {
+      Visit& v = visits.back();
+      const std::uint32_t slot = v.slot;
+      if (v.node < n) {
+        const FacetId f = v.node;
+        out_links[slot] = leaf_flag | f;
+        out_volumes[slot] = fit_during_rounds ? volumes[f] : Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+        height = std::max(height, int(v.depth));
+        visits.pop_back();
+      } else if (v.children_done) {
+        const std::uint32_t c = out_links[slot];
+        out_volumes[slot] = fit_during_rounds ? volumes[v.node] : Volume::enclosing(out_volumes[c], out_volumes[c + 1]);
+        visits.pop_back();
       } else {
-        out_volumes[slot] = Volume::enclosing(out_volumes[link], out_volumes[link + 1]);
+        v.children_done = true;
+        const std::uint32_t c = next_slot, depth = v.depth + 1;
+        const std::size_t k = 2 * (std::size_t(v.node) - n);
+        out_links[slot] = c;
+        next_slot += 2;
+        const std::uint32_t first_child = children[k], second_child = children[k + 1];
+        visits.push_back({second_child, c + 1, depth, false});  // invalidates v
+        visits.push_back({first_child, c, depth, false});
       }
     }
   }
-  const int height = active_height[0];
   if constexpr (!kIsAabb && !is_hybrid_v<Volume>) {
     if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out_volumes, out_links, settings.cost);
   }
