@@ -142,8 +142,9 @@ TEST(BulletReliability, OddTerrainGivesNoNanAndNoFallThrough) {
 
 // A body whose centre was pressed just behind a flat terrain (as a deep pile does): a two-sided
 // mesh pushes it on down, through the floor (the shorter way out); a one-sided mesh pushes it
-// back up. For each shape: a box, a sphere and a capsule (the core's analytic contacts) and a
-// cylinder (Bullet's per-triangle GJK, corrected by the adapter). No gravity: only the contact moves it.
+// back up. For each shape: a box, a sphere and a capsule (the core's analytic contacts), a
+// cylinder and a convex hull (Bullet's per-triangle GJK, corrected by the adapter). No gravity:
+// only the contact moves it.
 TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
   TriangleMesh flat = make_terrain(8, 8, 1, 8, 0);  // 8 x 8 m, flat at z = 0, wound up
   BulletMesh bullet_mesh(flat);
@@ -152,10 +153,18 @@ TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
       case 0: return std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.5f));
       case 1: return std::make_unique<btSphereShape>(0.5f);
       case 2: return std::make_unique<btCapsuleShapeZ>(0.3f, 0.4f);
-      default: return std::make_unique<btCylinderShapeZ>(btVector3(0.5f, 0.5f, 0.5f));
+      case 3: return std::make_unique<btCylinderShapeZ>(btVector3(0.5f, 0.5f, 0.5f));
+      default: {  // an octagonal prism, 1 m across and 1 m high
+        auto hull = std::make_unique<btConvexHullShape>();
+        for (int k = 0; k < 8; ++k) {
+          const btScalar angle = btScalar(k) * SIMD_PI / 4;
+          for (const btScalar z : {-0.5f, 0.5f}) hull->addPoint(btVector3(0.5f * btCos(angle), 0.5f * btSin(angle), z));
+        }
+        return hull;
+      }
     }
   };
-  for (int kind = 0; kind < 4; ++kind) {
+  for (int kind = 0; kind < 5; ++kind) {
     for (const bool two_sided : {true, false}) {
       World world(true);
       world.world.setGravity(btVector3(0, 0, 0));
