@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
        << "\n- Boxes resting on a fractal terrain (100 x 100 units, `make_terrain`), " << with_commas(query_count)
        << " per terrain, half sizes 0.75-2.25 cells across and 0.2-2 cells high. Each engine appends the ids of the "
           "facets whose leaf box overlaps the box to a vector (no triangle test). boxtree `aabb`: the packed tree "
-          "the adapters hold (16-bit boxes, 32 B/facet); `aabb-exact`: the exact `Tree<Aabb>` (double boxes). "
+          "the adapters hold (16-bit boxes, 22 B/facet); `aabb-exact`: the exact `Tree<Aabb>` (double boxes). "
           "Bullet: `reportAabbOverlappingNodex` of a quantized `btBvhTriangleMeshShape`.\n"
           "- *missed*: of the first 1,000 boxes, those where a facet whose triangle meets the box was not reported "
           "(must be 0). Time: the fastest of " << rounds << " passes per engine, the engines taking turns. Ratios: boxtree / Bullet (time: lower is better).\n\n"
