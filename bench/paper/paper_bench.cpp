@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
   std::string mesh_dir = "../shared/meshes";
   std::string methods_text =
       "aabb,obb-all,obb-max,obb-min,pie-max,pie-min,pie-max-general,pie-min-general,obb-min+aabb@3,pie-min+aabb@3,"
-      "pie-min-general+aabb@3";
+      "pie-min-general+aabb@3,obb-min-tight,obb-all-tight,pie-min-general-tight";
   int repeats = 5;
   bool quick = false;
   bool with_fcl = true;
