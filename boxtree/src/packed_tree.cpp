@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "boxtree/volume/obb.h"
 #include "query_internal.h"
 
 #if defined(__SSE2__)
@@ -213,15 +214,12 @@ GridBox grid_box_of(const PackedAabbTree& tree, const Aabb& box) {
   return grid;
 }
 
-const Aabb& bounding_box_of(const Aabb& box) { return box; }
-Aabb bounding_box_of(const Obb& box) {
-  const Vec3 reach = box.axes.cwiseAbs() * box.half_extents;
-  return {box.center - reach, box.center + reach};
-}
-Aabb bounding_box_of(const Sphere& sphere) {
+// The bounding boxes of the query shapes that volume/ does not define (Aabb and Obb are
+// volume/aabb.h's and volume/obb.h's bounding_aabb).
+Aabb bounding_aabb(const Sphere& sphere) {
   return {sphere.center.array() - sphere.radius, sphere.center.array() + sphere.radius};
 }
-Aabb bounding_box_of(const Capsule& capsule) {
+Aabb bounding_aabb(const Capsule& capsule) {
   return {capsule.p0.cwiseMin(capsule.p1).array() - capsule.radius,
           capsule.p0.cwiseMax(capsule.p1).array() + capsule.radius};
 }
@@ -570,7 +568,7 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
   };
   // Every node test starts with the shape's bounding box on the grid: six integer compares per
   // child, four children at once. An Aabb query needs nothing more.
-  const GridBox grid = grid_box_of(tree, bounding_box_of(shape));
+  const GridBox grid = grid_box_of(tree, bounding_aabb(shape));
   if constexpr (std::is_same_v<Shape, Aabb>) {
     walk(
         tree, [&](const PackedAabbTree::Node& node) { return grid.overlaps(node); }, leaf, sink.local);
@@ -587,9 +585,9 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
         [&](const PackedAabbTree::Node& node) {
           const unsigned mask = faces.overlaps(node, grid.overlaps(node));
           if (test == FacetTest::exact_triangle) return mask;
-          return refine_mask(tree, node, mask & leaf_slots(node),
-                             [&](const Aabb& box) { return overlaps(box, shape); }) |
-                 (mask & ~leaf_slots(node));
+          const unsigned leaves = mask & leaf_slots(node);
+          return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
+                 (mask & ~leaves);
         },
         leaf, sink.local);
   } else {
@@ -685,7 +683,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
       const RigidTransform& to_split = split_a ? a_from_b : b_from_a;
       const Aabb& box = split_a ? pair.box_b : pair.box_a;
       const Obb other{to_split.apply(box.center()), to_split.rotation, box.extent() * Real(0.5)};
-      cull_grid = grid_box_of(tree, bounding_box_of(other));
+      cull_grid = grid_box_of(tree, bounding_aabb(other));
       cull_faces = GridObbAxes(tree, other.center, other.axes, other.half_extents);
       cached = true;
       cached_split_a = split_a;
