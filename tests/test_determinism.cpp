@@ -89,7 +89,10 @@ std::vector<std::pair<std::string, TriangleMesh>> determinism_meshes() {
 // "mesh method" -> "tree-hash query-hash", for every mesh and method.
 std::map<std::string, std::string> all_fingerprints() {
   std::map<std::string, std::string> out;
-  for (const auto& [name, mesh] : determinism_meshes()) {
+  for (const auto& named_mesh : determinism_meshes()) {
+    // Named references, not a structured binding: lambdas may capture those only from C++20.
+    const std::string& name = named_mesh.first;
+    const TriangleMesh& mesh = named_mesh.second;
     for (const char* method : kMethods) {
       with_method(parse_method(method), [&](auto tag) {
         using V = typename decltype(tag)::type;
@@ -103,7 +106,9 @@ std::map<std::string, std::string> all_fingerprints() {
 }
 
 TEST(Determinism, RebuildsAreBitIdentical) {
-  for (const auto& [name, mesh] : determinism_meshes()) {
+  for (const auto& named_mesh : determinism_meshes()) {
+    const std::string& name = named_mesh.first;
+    const TriangleMesh& mesh = named_mesh.second;
     for (const char* method : kMethods) {
       with_method(parse_method(method), [&](auto tag) {
         using V = typename decltype(tag)::type;

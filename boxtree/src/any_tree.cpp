@@ -72,7 +72,9 @@ void AnyTree::query_overlap(const Capsule& shape, FunctionRef<bool(FacetId)> vis
 void AnyTree::collide(const AnyTree& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> visit,
                       QueryStats* stats, const CollideSettings& settings) const {
   if (!impl_ || !b.impl_) return;
-  if (typeid(*impl_) != typeid(*b.impl_)) {
+  const Concept& mine = *impl_;
+  const Concept& theirs = *b.impl_;
+  if (typeid(mine) != typeid(theirs)) {
     throw Error("boxtree::AnyTree::collide: the trees use different methods (" + method_name(method_) + " and " +
                 method_name(b.method_) + "); build both with the same method");
   }

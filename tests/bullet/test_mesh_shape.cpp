@@ -230,11 +230,17 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
       ASSERT_EQ(a.hasHit(), b.hasHit()) << "ray " << i;
       if (!a.hasHit()) continue;
       ++hits;
-      ASSERT_EQ(a.m_closestHitFraction, b.m_closestHitFraction) << "ray " << i;
       if (a.triangle != b.triangle) {
-        ++ties;  // through a shared edge or vertex: equal fractions, either facet is right
+        // Through a shared edge or vertex: either facet is right. The oriented trees test the
+        // ray against the leaves in double and may pass just beside a facet that Bullet's
+        // single-precision triangle test takes by rounding; the hit is then the neighbour's
+        // across the edge, at a fraction that differs by float rounding, more at grazing angles
+        // (seen: 1.5e-7 for obb-min, 1.25e-6 for pie-min+aabb@3).
+        ++ties;
+        EXPECT_NEAR(a.m_closestHitFraction, b.m_closestHitFraction, 1e-5) << "ray " << i;
         continue;
       }
+      ASSERT_EQ(a.m_closestHitFraction, b.m_closestHitFraction) << "ray " << i;
       // (btVector3::operator== also compares the unused fourth lane: compare x, y, z.)
       EXPECT_EQ(to_vec3(a.m_hitNormalWorld), to_vec3(b.m_hitNormalWorld)) << "ray " << i;
       EXPECT_LT((to_vec3(a.m_hitPointWorld) - to_vec3(b.m_hitPointWorld)).norm(), 1e-9)

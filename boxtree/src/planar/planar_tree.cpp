@@ -14,8 +14,6 @@
 namespace boxtree::planar {
 namespace {
 
-constexpr std::uint32_t kNone = 0xffffffffu;
-
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 

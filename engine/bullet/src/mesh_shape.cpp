@@ -1,6 +1,7 @@
 #include "boxtree/bullet/mesh_shape.h"
 
 #include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
+#include <LinearMath/btAabbUtil2.h>
 
 #include <algorithm>
 #include <cmath>
@@ -158,10 +159,19 @@ void BoxtreeMeshShape::scaledTriangle(FacetId facet, btVector3 out[3]) const {
 void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
                                            const btVector3& aabbMax) const {
   btVector3 triangle[3];
-  auto report = [&](FacetId f) {
+  // `in_box`: report the triangle only if its own box overlaps the query box, in Bullet's frame.
+  auto report = [&](FacetId f, bool in_box = false) {
     int part = 0, index = 0;
     facetToPart(f, part, index);
     scaledTriangle(f, triangle);
+    if (in_box) {
+      btVector3 lo = triangle[0], hi = triangle[0];
+      for (int k = 1; k < 3; ++k) {
+        lo.setMin(triangle[k]);
+        hi.setMax(triangle[k]);
+      }
+      if (!TestAabbAgainstAabb2(lo, hi, aabbMin, aabbMax)) return;
+    }
     ++m_counters.triangles;
     callback->processTriangle(triangle, part, index);
   };
@@ -175,11 +185,16 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
     Ray ray;
     ray.origin = to_vec(ray_cb->m_from * inv);
     ray.direction = to_vec((ray_cb->m_to - ray_cb->m_from) * inv);
+    // The callback computes hit fractions in single precision, a few float ulps of the ray's
+    // length either side of the exact ones; the tree walks in double. Pruning at the callback's
+    // fraction itself could skip a triangle whose rounded fraction Bullet would have taken (a
+    // near-tie at a shared edge): prune a little beyond it (1e-5 of the ray's length).
+    constexpr Real kFractionSlack = 1e-5;
     ray.t_min = 0;
-    ray.t_max = ray_cb->m_hitFraction;
+    ray.t_max = Real(ray_cb->m_hitFraction) + kFractionSlack;
     m_tree.ray_candidates(ray, [&](FacetId f, Real) {
       report(f);
-      return Real(ray_cb->m_hitFraction);
+      return Real(ray_cb->m_hitFraction) + kFractionSlack;
     });
     return;
   }
@@ -201,8 +216,10 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
   // Axis-aligned trees report exactly the triangles whose own box overlaps the query box (what
   // btBvhTriangleMeshShape reports, without its quantization slack); oriented ones report the
   // triangles that overlap the query box itself (their leaves are tighter than a triangle's box).
+  // The packed tree's leaf boxes are a grid step or two larger than the triangles' own, so the
+  // triangle, fetched for the callback anyway, is checked against the query box.
   m_tree.query_overlap(box, [&](FacetId f) {
-    report(f);
+    report(f, aabb_tree);
     return true;
   }, nullptr, aabb_tree ? FacetTest::leaf_volume : FacetTest::exact_triangle);
 }
