@@ -610,16 +610,35 @@ PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const Tria
     const Real d2 = (x - y).squaredNorm();
     if (d2 < best.distance_squared) best = {x, y, d2};
   };
+  // A feature pair is skipped when a lower bound of its distance (centre distance minus both
+  // bounding radii) already reaches the best pair so far: for a box resting on a terrain most of
+  // the 36 edge pairs are far from the closest pair, and the cheap candidates (the triangle's
+  // corners against the box) usually find it first.
+  const auto cannot_beat = [&](const Vec3& c0, Real r0, const Vec3& c1, Real r1) {
+    const Real lower = (c0 - c1).norm() - r0 - r1;
+    return lower > 0 && lower * lower >= best.distance_squared;
+  };
+  for (int j = 0; j < 3; ++j) consider(shape.closest_point(tri.v[j]), tri.v[j]);
+  const Vec3 tri_center = (tri.v[0] + tri.v[1] + tri.v[2]) / 3;
+  const Real tri_radius = std::sqrt(std::max({(tri.v[0] - tri_center).squaredNorm(), (tri.v[1] - tri_center).squaredNorm(),
+                                              (tri.v[2] - tri_center).squaredNorm()}));
   for (int i = 0; i < shape.vertex_count; ++i) {
+    if (cannot_beat(shape.vertices[i], 0, tri_center, tri_radius)) continue;
     consider(shape.vertices[i], closest_point_on_triangle(shape.vertices[i], tri.v[0], tri.v[1], tri.v[2]));
   }
-  for (int j = 0; j < 3; ++j) consider(shape.closest_point(tri.v[j]), tri.v[j]);
   for (int e = 0; e < shape.edge_count; ++e) {
+    const Vec3& p0 = shape.vertices[shape.edge_from[e]];
+    const Vec3& p1 = shape.vertices[shape.edge_to[e]];
+    const Vec3 edge_center = (p0 + p1) / 2;
+    const Real edge_radius = (p1 - p0).norm() / 2;
+    if (cannot_beat(edge_center, edge_radius, tri_center, tri_radius)) continue;
     for (int j = 0; j < 3; ++j) {
+      const Vec3& q0 = tri.v[j];
+      const Vec3& q1 = tri.v[(j + 1) % 3];
+      if (cannot_beat(edge_center, edge_radius, (q0 + q1) / 2, (q1 - q0).norm() / 2)) continue;
       Vec3 x;
       Vec3 y;
-      closest_points_on_segments(shape.vertices[shape.edge_from[e]], shape.vertices[shape.edge_to[e]], tri.v[j],
-                                 tri.v[(j + 1) % 3], x, y);
+      closest_points_on_segments(p0, p1, q0, q1, x, y);
       consider(x, y);
     }
   }
@@ -1086,7 +1105,15 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
                          ContactPoint* out) {
   if (!finite(a, b, c) || !box.center.allFinite() || !box.axes.allFinite() || !box.half_extents.allFinite()) return 0;
   const TriangleFrame tri(a, b, c);
-  return polytope_triangle(polytope_of_box(box), tri, options, kMaxBoxTriangleContacts, out);
+  // A midphase calls this for many triangles against one box: its polytope (vertices, edges, faces
+  // and their sides, over a kilobyte) is built once per box and thread, not per triangle.
+  thread_local Obb last_box{Vec3::Constant(kInf), Mat3::Zero(), Vec3::Zero()};
+  thread_local Polytope last_polytope;
+  if (box.center != last_box.center || box.axes != last_box.axes || box.half_extents != last_box.half_extents) {
+    last_polytope = polytope_of_box(box);
+    last_box = box;
+  }
+  return polytope_triangle(last_polytope, tri, options, kMaxBoxTriangleContacts, out);
 }
 
 // ---------------------------------------------------------------------------------------------

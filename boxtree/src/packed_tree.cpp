@@ -702,7 +702,9 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
         child.b.value = link_b * kWidth + std::uint32_t(slot);
         child.box_b = box_of(b, child.b);
       }
-      if (overlaps(child.box_a, child.box_b, a_from_b)) stack[top++] = child;
+      // An inner child that passed the culling is entered without the exact test's nine edge
+      // axes (its children get culled next anyway); a leaf gets it before its triangle tests.
+      if (!PackedAabbTree::is_leaf(split.link[slot]) || overlaps(child.box_a, child.box_b, a_from_b)) stack[top++] = child;
     }
   }
 }
