@@ -239,10 +239,28 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     corrected.convex = &convex;
     corrected.convex_in_mesh = convex_in_mesh;
 
+    // The body's extent along the facet's normal, from its support function: a facet whose plane
+    // the body is wholly above (or below) by more than the reach can give no contact, and skips
+    // Bullet's per-triangle algorithm (GJK, the dearest part of a convex-mesh pair).
+    const btMatrix3x3 mesh_to_convex = convex_in_mesh.getBasis().transpose();
+    const btScalar bt_reach = btScalar(reach);
+    auto out_of_reach = [&](const btVector3 tri[3]) {
+      const btVector3 normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+      const btScalar length = normal.length();
+      if (!(length > 0)) return false;
+      const btVector3 n = normal / length;
+      const btScalar plane = n.dot(tri[0]);
+      const btScalar lowest = n.dot(convex_in_mesh(convex.localGetSupportingVertex(mesh_to_convex * -n)));
+      if (lowest - plane > bt_reach) return true;
+      const btScalar highest = n.dot(convex_in_mesh(convex.localGetSupportingVertex(mesh_to_convex * n)));
+      return plane - highest > bt_reach;
+    };
+
     auto visit = [&](FacetId f) {
-      mesh.countNarrowphaseTriangles(1);
       btVector3 tri[3];
       mesh.scaledTriangle(f, tri);
+      if (out_of_reach(tri)) return true;
+      mesh.countNarrowphaseTriangles(1);
       btTriangleShape triangle(tri[0], tri[1], tri[2]);
       triangle.setMargin(mesh.getMargin());
       int part = 0, index = 0;
