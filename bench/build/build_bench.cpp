@@ -8,7 +8,10 @@
 //  - boxtree: Tree::memory_bytes(): the node volumes and the 4-byte links (capacity). The tree
 //    shares the caller's mesh (std::shared_ptr), no copy. For `aabb`: the PackedAabbTree that
 //    AnyTree and the engine adapters hold (build_tree + packing, both timed); `aabb-exact` is
-//    the exact Tree<Aabb> alone.
+//    the exact Tree<Aabb> alone. Likewise for the plain pie-slice methods (`pie-max`, `pie-min`,
+//    `pie-max-general`, `pie-min-general`): the PackedPrismTree AnyTree holds (float prisms,
+//    48 B per inner node, leaves not stored); `pie-min-exact` (any pie name + `-exact`) is the
+//    exact Tree<PieSlice> alone.
 //  - Bullet: btQuantizedBvh's quantized node array (16 B per node) + subtree headers + the
 //    arrays still held after the build (its quantized leaf-node array). Bullet reads the
 //    caller's btScalar arrays through btTriangleIndexVertexArray.
@@ -38,6 +41,7 @@
 #include "boxtree/build.h"
 #include "boxtree/generate.h"
 #include "boxtree/method.h"
+#include "boxtree/packed_prism_tree.h"
 #include "boxtree/packed_tree.h"
 #include "peers/bullet_peer.h"
 #include "peers/embree_peer.h"
@@ -79,6 +83,13 @@ Measure fastest(int repeats, Build&& build) {
 // --ranking: "" keeps BuildSettings' default.
 std::string g_ranking;
 
+// The bench-only names of the exact trees beside the packed forms AnyTree holds: `aabb-exact`,
+// and a pie-slice method + `-exact` (e.g. `pie-min-exact`, `pie-max-general-tight-exact`).
+bool is_exact_name(const std::string& name) {
+  const std::string suffix = "-exact";
+  return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, const std::string& name) {
   if (name == "aabb") {
     Measure m;
@@ -91,7 +102,8 @@ Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, 
     m.note = "packed: 64 B per 4-wide node, " + with_commas(packed.nodes().size()) + " nodes";
     return m;
   }
-  const boxtree::Method method = boxtree::parse_method(name == "aabb-exact" ? "aabb" : name);
+  const bool exact = is_exact_name(name);
+  const boxtree::Method method = boxtree::parse_method(exact ? name.substr(0, name.size() - 6) : name);
   boxtree::BuildSettings settings = boxtree::settings_for(method);
   if (g_ranking == "merged-volume") settings.ranking = boxtree::PairRanking::merged_volume;
   if (g_ranking == "bounding-box") settings.ranking = boxtree::PairRanking::bounding_box;
@@ -101,6 +113,16 @@ Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, 
     m.engine = "boxtree " + name;
     const auto start = Clock::now();
     const boxtree::Tree<V> tree = boxtree::build_tree<V>(mesh, settings);
+    if constexpr (boxtree::is_pie_slice_v<V>) {
+      if (!exact) {  // what AnyTree holds: the packed form, packing timed too
+        const boxtree::PackedPrismTree packed(tree);
+        m.seconds = boxtree::bench::seconds_since(start);
+        m.bytes = packed.memory_bytes();
+        m.nodes = packed.node_count();
+        m.note = "packed: 48 B per inner node (" + with_commas(packed.nodes().size()) + "), leaves not stored";
+        return m;
+      }
+    }
     m.seconds = boxtree::bench::seconds_since(start);
     m.bytes = tree.memory_bytes();
     m.nodes = tree.node_count();
@@ -177,7 +199,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Build time and memory: boxtree methods vs Bullet, FCL, Embree on terrains (single thread)"};
   bool quick = false;
   std::string json_path, markdown_path, plot_dir, csv_path, meshes_dir;
-  std::string methods_list = "aabb,aabb-exact,obb-all,obb-max,obb-min,pie-max,pie-min,pie-max-general,pie-min-general";
+  std::string methods_list =
+      "aabb,aabb-exact,obb-all,obb-max,obb-min,pie-max,pie-min,pie-min-exact,pie-max-general,pie-min-general";
   std::string large_methods_list = "aabb,aabb-exact,obb-all";
   std::string sizes_list;
   std::size_t large_from = 500000;
@@ -213,8 +236,15 @@ int main(int argc, char** argv) {
   try {
     for (const auto& s : split(sizes_list)) sizes.push_back(std::stoull(s));
     for (const auto& list : {methods, large_methods})
-      for (const auto& m : list)
-        if (m != "aabb-exact") boxtree::parse_method(m);  // aabb-exact: the bench-only exact Tree<Aabb>
+      for (const auto& m : list) {
+        // aabb-exact, pie-...-exact: the bench-only exact trees
+        const boxtree::Method method = boxtree::parse_method(is_exact_name(m) ? m.substr(0, m.size() - 6) : m);
+        using boxtree::VolumeKind;
+        const bool pie = method.kind == VolumeKind::pie_max || method.kind == VolumeKind::pie_min ||
+                         method.kind == VolumeKind::pie_max_general || method.kind == VolumeKind::pie_min_general;
+        const bool packed = method.kind == VolumeKind::aabb || (pie && method.hybrid_level == 0);
+        if (is_exact_name(m) && !packed) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
+      }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "build_bench: error: %s\n", e.what());
     return 2;

@@ -25,6 +25,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,7 @@
 #include "boxtree/generate.h"
 #include "boxtree/io.h"
 #include "boxtree/method.h"
+#include "boxtree/packed_prism_tree.h"
 #include "boxtree/packed_tree.h"
 #include "boxtree/query.h"
 #include "ode_rays.h"
@@ -152,9 +154,10 @@ class RayEngine {
   std::string engine_, method_;
 };
 
-// boxtree's typed query (no virtual call per ray or per node). TreeType: Tree<V>, or
-// PackedAabbTree for `aabb` (the form AnyTree and so the engine adapters hold); the bench-only
-// name `aabb-exact` runs the exact Tree<Aabb> beside it.
+// boxtree's typed query (no virtual call per ray or per node). TreeType: Tree<V>, or the packed
+// forms AnyTree and so the engine adapters hold: PackedAabbTree for `aabb`, PackedPrismTree for
+// the plain pie-slice methods. The bench-only names `aabb-exact` and a pie-slice method +
+// `-exact` (e.g. `pie-min-exact`) run the exact trees beside them.
 template <class TreeType>
 class BoxtreeEngine final : public RayEngine {
  public:
@@ -183,17 +186,22 @@ class BoxtreeEngine final : public RayEngine {
 
 std::unique_ptr<RayEngine> make_boxtree_engine(const std::shared_ptr<const boxtree::TriangleMesh>& mesh,
                                                const std::string& name) {
-  if (name == "aabb-exact") {
-    return std::make_unique<BoxtreeEngine<boxtree::Tree<boxtree::Aabb>>>(
-        name, [&] { return boxtree::build_tree<boxtree::Aabb>(mesh); });
-  }
-  const boxtree::Method method = boxtree::parse_method(name);
+  const std::string suffix = "-exact";
+  const bool exact = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  const boxtree::Method method = boxtree::parse_method(exact ? name.substr(0, name.size() - suffix.size()) : name);
   return boxtree::with_method(method, [&](auto tag) -> std::unique_ptr<RayEngine> {
     using V = typename decltype(tag)::type;
     if constexpr (std::is_same_v<V, boxtree::Aabb>) {
+      if (exact) return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(name, [&] { return boxtree::build_tree<V>(mesh); });
       return std::make_unique<BoxtreeEngine<boxtree::PackedAabbTree>>(
           name, [&] { return boxtree::PackedAabbTree(boxtree::build_tree<V>(mesh)); });
+    } else if constexpr (boxtree::is_pie_slice_v<V>) {
+      const auto build = [&] { return boxtree::build_tree<V>(mesh, boxtree::settings_for(method)); };
+      if (exact) return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(name, build);
+      return std::make_unique<BoxtreeEngine<boxtree::PackedPrismTree>>(name,
+                                                                        [&] { return boxtree::PackedPrismTree(build()); });
     } else {
+      if (exact) throw std::runtime_error("'" + name + "': -exact applies to aabb and the plain pie-slice methods");
       return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(
           name, [&] { return boxtree::build_tree<V>(mesh, boxtree::settings_for(method)); });
     }
@@ -290,7 +298,8 @@ int main(int argc, char** argv) {
   if (methods.empty()) methods.push_back("aabb");
   try {
     for (const auto& m : methods)
-      if (m != "aabb-exact") boxtree::parse_method(m);  // aabb-exact: the bench-only exact Tree<Aabb>
+      boxtree::parse_method(m.size() > 6 && m.compare(m.size() - 6, 6, "-exact") == 0 ? m.substr(0, m.size() - 6)
+                                                                                    : m);  // -exact: bench-only names
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ray_bench: error: %s\n", e.what());
     return 2;

@@ -12,6 +12,7 @@ AnyTree AnyTree::build(std::shared_ptr<const TriangleMesh> mesh, const Method& m
     using V = typename decltype(tag)::type;
     auto tree = build_tree<V>(std::move(mesh), settings_for(method, settings), stats);
     if constexpr (std::is_same_v<V, Aabb>) return AnyTree(PackedAabbTree(tree));
+    else if constexpr (is_pie_slice_v<V>) return AnyTree(PackedPrismTree(tree), method);
     else return AnyTree(std::move(tree), method);
   });
 }
@@ -21,6 +22,15 @@ AnyTree::AnyTree(PackedAabbTree tree)
 
 const PackedAabbTree* AnyTree::packed() const {
   const auto* model = dynamic_cast<const Model<PackedAabbTree>*>(impl_.get());
+  return model ? &model->tree : nullptr;
+}
+
+AnyTree::AnyTree(PackedPrismTree tree, const Method& method)
+    : impl_(tree.empty() ? nullptr : std::make_shared<const Model<PackedPrismTree>>(std::move(tree))),
+      method_(method) {}
+
+const PackedPrismTree* AnyTree::packed_prism() const {
+  const auto* model = dynamic_cast<const Model<PackedPrismTree>*>(impl_.get());
   return model ? &model->tree : nullptr;
 }
 
@@ -74,7 +84,9 @@ void AnyTree::collide(const AnyTree& b, const RigidTransform& a_from_b, Function
   if (!impl_ || !b.impl_) return;
   const Concept& mine = *impl_;
   const Concept& theirs = *b.impl_;
-  if (typeid(mine) != typeid(theirs)) {
+  // Packed pie-slice trees share one type for the four pie kinds: their methods tell them apart.
+  const bool other_pie_kind = packed_prism() != nullptr && method_.kind != b.method_.kind;
+  if (typeid(mine) != typeid(theirs) || other_pie_kind) {
     throw Error("boxtree::AnyTree::collide: the trees use different methods (" + method_name(method_) + " and " +
                 method_name(b.method_) + "); build both with the same method");
   }

@@ -16,9 +16,13 @@ bool is_rotation(const Mat3& rotation, Real tolerance) {
   return (gram - Mat3::Identity()).cwiseAbs().maxCoeff() <= tolerance && std::abs(rotation.determinant() - 1) <= tolerance;
 }
 
-template <class Volume>
-void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform& a_from_b,
-             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
+namespace {
+
+// The tree-vs-tree walk over two views of the same kind (query_internal.h: detail::TreeView for
+// Tree<V>, detail::PackedPrismView for PackedPrismTree).
+template <class View>
+void collide_views(const View& a, const View& b, const RigidTransform& a_from_b,
+                   FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
   if (!a_from_b.translation.allFinite() || !is_rotation(a_from_b.rotation, 1e-6))
     throw Error("collide: the transform's rotation is not orthonormal with determinant +1, or not finite");
   QueryStats local;
@@ -26,12 +30,13 @@ void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform&
   const TriangleMesh& mesh_a = a.mesh();
   const TriangleMesh& mesh_b = b.mesh();
 
+  using Node = typename View::Node;
   struct NodePair {
-    NodeIndex a, b;
+    Node a, b;
   };
   // Each step pops one pair and pushes at most two, and the depth of a pair is at most the sum of
   // the two heights, so the stack never holds more than height(a) + height(b) + 2 pairs: a fixed array, no allocation.
-  NodePair stack[2 * Tree<Volume>::kMaxHeight + 4];
+  NodePair stack[2 * Tree<Aabb>::kMaxHeight + 4];
   int top = 0;
   ++local.volume_tests;
   if (overlaps(a.volume(a.root()), b.volume(b.root()), a_from_b)) stack[top++] = {a.root(), b.root()};
@@ -50,22 +55,32 @@ void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform&
       }
       continue;
     }
+    // The pair's volumes: references into a Tree, decoded prisms for the packed form (once per pair).
+    const auto& volume_a = a.volume(pair.a);
+    const auto& volume_b = b.volume(pair.b);
     // Split the larger volume (or the one that is not a leaf).
-    const bool split_a =
-        !leaf_a && (leaf_b || surface_area(a.volume(pair.a)) >= surface_area(b.volume(pair.b)));
+    const bool split_a = !leaf_a && (leaf_b || surface_area(volume_a) >= surface_area(volume_b));
     if (split_a) {
-      const NodeIndex c = a.first_child(pair.a);
+      const auto c = a.children(pair.a);
       local.volume_tests += 2;
-      if (overlaps(a.volume(c + 1), b.volume(pair.b), a_from_b)) stack[top++] = {c + 1, pair.b};
-      if (overlaps(a.volume(c), b.volume(pair.b), a_from_b)) stack[top++] = {c, pair.b};
+      if (overlaps(a.volume(c[1]), volume_b, a_from_b)) stack[top++] = {c[1], pair.b};
+      if (overlaps(a.volume(c[0]), volume_b, a_from_b)) stack[top++] = {c[0], pair.b};
     } else {
-      const NodeIndex c = b.first_child(pair.b);
+      const auto c = b.children(pair.b);
       local.volume_tests += 2;
-      if (overlaps(a.volume(pair.a), b.volume(c + 1), a_from_b)) stack[top++] = {pair.a, c + 1};
-      if (overlaps(a.volume(pair.a), b.volume(c), a_from_b)) stack[top++] = {pair.a, c};
+      if (overlaps(volume_a, b.volume(c[1]), a_from_b)) stack[top++] = {pair.a, c[1]};
+      if (overlaps(volume_a, b.volume(c[0]), a_from_b)) stack[top++] = {pair.a, c[0]};
     }
   }
   if (stats) *stats += local;
+}
+
+}  // namespace
+
+template <class Volume>
+void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform& a_from_b,
+             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
+  collide_views(detail::TreeView<Volume>{a}, detail::TreeView<Volume>{b}, a_from_b, visit, stats, settings);
 }
 
 template <class Volume>
@@ -81,5 +96,15 @@ std::vector<FacetPair> collide(const Tree<Volume>& a, const Tree<Volume>& b, con
   template std::vector<FacetPair> collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&, QueryStats*, \
                                              const CollideSettings&);
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_COLLIDE)
+
+void collide(const PackedPrismTree& a, const PackedPrismTree& b, const RigidTransform& a_from_b,
+             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
+  collide_views(detail::PackedPrismView{a}, detail::PackedPrismView{b}, a_from_b, visit, stats, settings);
+}
+
+std::vector<FacetPair> collide(const PackedPrismTree& a, const PackedPrismTree& b, const RigidTransform& a_from_b,
+                               QueryStats* stats, const CollideSettings& settings) {
+  return detail::collect_sorted<FacetPair>([&](auto visit) { collide(a, b, a_from_b, visit, stats, settings); });
+}
 
 }  // namespace boxtree

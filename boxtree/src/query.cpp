@@ -8,43 +8,46 @@
 namespace boxtree {
 namespace {
 
+using detail::PackedPrismView;
 using detail::StatsSink;
+using detail::TreeView;
 
 constexpr int kStackSize = Tree<Aabb>::kMaxHeight + 2;
 
 // Depth-first walk of every node whose volume passes `node_test`; `leaf` is called for each
-// such leaf's facet and returns false to stop the walk.
-template <class Volume, class NodeTest, class Leaf>
-void walk(const Tree<Volume>& tree, NodeTest&& node_test, Leaf&& leaf, QueryStats& stats) {
+// such leaf's facet and returns false to stop the walk. View: detail::TreeView or
+// detail::PackedPrismView (query_internal.h).
+template <class View, class NodeTest, class Leaf>
+void walk(const View& tree, NodeTest&& node_test, Leaf&& leaf, QueryStats& stats) {
   if (tree.empty()) return;
-  NodeIndex stack[kStackSize];
+  typename View::Node stack[kStackSize];
   int top = 0;
   ++stats.volume_tests;
   if (!node_test(tree.volume(tree.root()))) return;
   stack[top++] = tree.root();
   while (top > 0) {
-    const NodeIndex node = stack[--top];
+    const auto node = stack[--top];
     ++stats.nodes_visited;
     if (tree.is_leaf(node)) {
       if (!leaf(tree.facet(node))) return;
       continue;
     }
-    const NodeIndex child = tree.first_child(node);
+    const auto child = tree.children(node);
     stats.volume_tests += 2;
-    if (node_test(tree.volume(child + 1))) stack[top++] = child + 1;
-    if (node_test(tree.volume(child))) stack[top++] = child;
+    if (node_test(tree.volume(child[1]))) stack[top++] = child[1];
+    if (node_test(tree.volume(child[0]))) stack[top++] = child[0];
   }
 }
 
 // Front-to-back walk of the nodes the ray meets within [ray.t_min, t_max]; `leaf(facet, t_max)`
 // returns the new t_max, which prunes every node entered farther than it.
-template <class Volume, class Leaf>
-void ordered_ray_walk(const Tree<Volume>& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
+template <class View, class Leaf>
+void ordered_ray_walk(const View& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
   if (tree.empty() || !is_valid(ray)) return;
   const RayPrecomputed pre(ray);
   Real t_max = ray.t_max;
   struct Entry {
-    NodeIndex node;
+    typename View::Node node;
     Real t_enter;
   };
   Entry stack[kStackSize];
@@ -56,39 +59,39 @@ void ordered_ray_walk(const Tree<Volume>& tree, const Ray& ray, Leaf&& leaf, Que
   while (top > 0) {
     const Entry entry = stack[--top];
     if (entry.t_enter > t_max) continue;  // a closer hit was found since this node was pushed
-    const NodeIndex node = entry.node;
+    const auto node = entry.node;
     ++stats.nodes_visited;
     if (tree.is_leaf(node)) {
       t_max = std::min(t_max, leaf(tree.facet(node), t_max));
       if (!(t_max >= ray.t_min)) return;
       continue;
     }
-    const NodeIndex child = tree.first_child(node);
+    const auto child = tree.children(node);
     Real t0 = 0, t1 = 0;
     stats.volume_tests += 2;
-    const bool hit0 = intersect_ray(tree.volume(child), pre, ray.t_min, t_max, &t0);
-    const bool hit1 = intersect_ray(tree.volume(child + 1), pre, ray.t_min, t_max, &t1);
+    const bool hit0 = intersect_ray(tree.volume(child[0]), pre, ray.t_min, t_max, &t0);
+    const bool hit1 = intersect_ray(tree.volume(child[1]), pre, ray.t_min, t_max, &t1);
     // Push the farther child first so the nearer one is explored first.
     if (hit0 && hit1) {
       if (t0 <= t1) {
-        stack[top++] = {child + 1, t1};
-        stack[top++] = {child, t0};
+        stack[top++] = {child[1], t1};
+        stack[top++] = {child[0], t0};
       } else {
-        stack[top++] = {child, t0};
-        stack[top++] = {child + 1, t1};
+        stack[top++] = {child[0], t0};
+        stack[top++] = {child[1], t1};
       }
     } else if (hit0) {
-      stack[top++] = {child, t0};
+      stack[top++] = {child[0], t0};
     } else if (hit1) {
-      stack[top++] = {child + 1, t1};
+      stack[top++] = {child[1], t1};
     }
   }
 }
 
-}  // namespace
+// The bodies of the public queries, once for every View.
 
-template <class Volume>
-std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+template <class View>
+std::optional<RayHit> closest_hit_of(const View& tree, const Ray& ray, QueryStats* stats) {
   StatsSink sink(stats);
   const TriangleMesh* mesh = tree.empty() ? nullptr : &tree.mesh();
   std::optional<RayHit> best;
@@ -108,9 +111,8 @@ std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, 
   return best;
 }
 
-template <class Volume>
-void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
-                    QueryStats* stats) {
+template <class View>
+void candidates_of(const View& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit, QueryStats* stats) {
   StatsSink sink(stats);
   ordered_ray_walk(
       tree, ray,
@@ -121,14 +123,14 @@ void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(F
       sink.local);
 }
 
-template <class Volume>
-void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit, QueryStats* stats) {
+template <class View>
+void all_hits_of(const View& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit, QueryStats* stats) {
   StatsSink sink(stats);
   if (tree.empty() || !is_valid(ray)) return;
   const TriangleMesh& mesh = tree.mesh();
   const RayPrecomputed pre(ray);
   walk(
-      tree, [&](const Volume& v) { return intersect_ray(v, pre, ray.t_min, ray.t_max); },
+      tree, [&](const auto& v) { return intersect_ray(v, pre, ray.t_min, ray.t_max); },
       [&](FacetId f) {
         ++sink.local.leaf_tests;
         TriangleHit hit;
@@ -136,6 +138,57 @@ void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(con
         return visit(RayHit{f, hit.t, hit.u, hit.v});
       },
       sink.local);
+}
+
+template <class View, class Shape>
+void overlap_of(const View& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                FacetTest test) {
+  StatsSink sink(stats);
+  if (tree.empty()) return;
+  const TriangleMesh& mesh = tree.mesh();
+  walk(
+      tree, [&](const auto& v) { return overlaps(v, shape); },
+      [&](FacetId f) {
+        if (test == FacetTest::exact_triangle) {
+          ++sink.local.leaf_tests;
+          if (!triangle_overlaps(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), shape)) return true;
+        }
+        return visit(f);
+      },
+      sink.local);
+}
+
+template <class View>
+void plane_of(const View& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
+  StatsSink sink(stats);
+  if (tree.empty()) return;
+  const TriangleMesh& mesh = tree.mesh();
+  walk(
+      tree, [&](const auto& v) { return overlaps(v, plane); },
+      [&](FacetId f) {
+        ++sink.local.leaf_tests;
+        if (!triangle_crosses_plane(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), plane)) return true;
+        return visit(f);
+      },
+      sink.local);
+}
+
+}  // namespace
+
+template <class Volume>
+std::optional<RayHit> ray_closest_hit(const Tree<Volume>& tree, const Ray& ray, QueryStats* stats) {
+  return closest_hit_of(TreeView<Volume>{tree}, ray, stats);
+}
+
+template <class Volume>
+void ray_candidates(const Tree<Volume>& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats) {
+  candidates_of(TreeView<Volume>{tree}, ray, visit, stats);
+}
+
+template <class Volume>
+void ray_all_hits(const Tree<Volume>& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit, QueryStats* stats) {
+  all_hits_of(TreeView<Volume>{tree}, ray, visit, stats);
 }
 
 template <class Volume>
@@ -152,18 +205,7 @@ std::vector<RayHit> ray_all_hits(const Tree<Volume>& tree, const Ray& ray, Query
 template <class Volume, class Shape>
 void query_overlap(const Tree<Volume>& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
                    FacetTest test) {
-  StatsSink sink(stats);
-  const TriangleMesh& mesh = tree.mesh();
-  walk(
-      tree, [&](const Volume& v) { return overlaps(v, shape); },
-      [&](FacetId f) {
-        if (test == FacetTest::exact_triangle) {
-          ++sink.local.leaf_tests;
-          if (!triangle_overlaps(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), shape)) return true;
-        }
-        return visit(f);
-      },
-      sink.local);
+  overlap_of(TreeView<Volume>{tree}, shape, visit, stats, test);
 }
 
 template <class Volume, class Shape>
@@ -174,16 +216,7 @@ std::vector<FacetId> query_overlap(const Tree<Volume>& tree, const Shape& shape,
 
 template <class Volume>
 void query_plane(const Tree<Volume>& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
-  StatsSink sink(stats);
-  const TriangleMesh& mesh = tree.mesh();
-  walk(
-      tree, [&](const Volume& v) { return overlaps(v, plane); },
-      [&](FacetId f) {
-        ++sink.local.leaf_tests;
-        if (!triangle_crosses_plane(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), plane)) return true;
-        return visit(f);
-      },
-      sink.local);
+  plane_of(TreeView<Volume>{tree}, plane, visit, stats);
 }
 
 template <class Volume>
@@ -197,7 +230,8 @@ std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QuerySta
   // Every node passed by the walk contains the point, inner nodes included: count them all.
   const std::uint64_t before = sink.local.nodes_visited;
   walk(
-      tree, [&](const Volume& v) { return contains(v, point); }, [](FacetId) { return true; }, sink.local);
+      TreeView<Volume>{tree}, [&](const Volume& v) { return contains(v, point); }, [](FacetId) { return true; },
+      sink.local);
   return std::size_t(sink.local.nodes_visited - before);
 }
 
@@ -220,5 +254,60 @@ std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QuerySta
   template std::vector<FacetId> query_overlap<V, S>(const Tree<V>&, const S&, QueryStats*, FacetTest);
 
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_QUERIES)
+
+// ---- The packed pie-slice tree (packed_prism_tree.h): the same walks over decoded prisms ----
+
+std::optional<RayHit> ray_closest_hit(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return closest_hit_of(PackedPrismView{tree}, ray, stats);
+}
+
+void ray_candidates(const PackedPrismTree& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats) {
+  candidates_of(PackedPrismView{tree}, ray, visit, stats);
+}
+
+void ray_all_hits(const PackedPrismTree& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit,
+                  QueryStats* stats) {
+  all_hits_of(PackedPrismView{tree}, ray, visit, stats);
+}
+
+std::optional<RayHit> ray_any_hit(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return detail::first_hit([&](auto visit) { ray_all_hits(tree, ray, visit, stats); });
+}
+
+std::vector<RayHit> ray_all_hits(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); },
+                                        detail::nearer_hit);
+}
+
+template <class Shape>
+void query_overlap(const PackedPrismTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit,
+                   QueryStats* stats, FacetTest test) {
+  overlap_of(PackedPrismView{tree}, shape, visit, stats, test);
+}
+
+template <class Shape>
+std::vector<FacetId> query_overlap(const PackedPrismTree& tree, const Shape& shape, QueryStats* stats,
+                                   FacetTest test) {
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_overlap<Shape>(tree, shape, visit, stats, test); });
+}
+
+void query_plane(const PackedPrismTree& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit,
+                 QueryStats* stats) {
+  plane_of(PackedPrismView{tree}, plane, visit, stats);
+}
+
+std::vector<FacetId> query_plane(const PackedPrismTree& tree, const Plane& plane, QueryStats* stats) {
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_plane(tree, plane, visit, stats); });
+}
+
+#define BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(S)                                                           \
+  template void query_overlap<S>(const PackedPrismTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*,  \
+                                 FacetTest);                                                                 \
+  template std::vector<FacetId> query_overlap<S>(const PackedPrismTree&, const S&, QueryStats*, FacetTest);
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Aabb)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Obb)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Sphere)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Capsule)
 
 }  // namespace boxtree
