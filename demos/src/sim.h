@@ -2,6 +2,7 @@
 // One physics world built from a Scene: Bullet or ODE, with the engine's own triangle-mesh
 // midphase or the boxtree adapter's. Both step with a fixed time step, single-threaded, so the
 // same scene gives the same motion on every run.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,29 @@ class Simulation {
   // ODE builtin: the triangles OPCODE hands to the colliders (dGeomTriMeshSetCallback); boxtree:
   // the candidate facets of every boxtree geom.
   virtual std::uint64_t narrowphase_triangles() const = 0;
+  // Collision time split by the kind of geom pair, for the benchmarks: one entry per pair kind
+  // seen so far ("terrain-box", ..., "body-body"), in a fixed order. ODE: the time of each
+  // dCollide call made by the near callback (the hash space's own work is outside all of them).
+  // Bullet: empty (its dispatcher offers no per-pair hook without replacing it).
+  struct PairKindTime {
+    std::string kind;
+    double seconds = 0;
+    std::uint64_t calls = 0, contacts = 0;
+    std::uint64_t triangles = 0;  // handed to the narrowphase (as narrowphase_triangles())
+  };
+  virtual std::vector<PairKindTime> collision_breakdown() const { return {}; }
+  // For the pair benchmark (bench/sim/pair_replay.cpp), ODE only (Bullet: false / empty).
+  // Puts every body at `poses` (scene order), at rest. False if not supported.
+  virtual bool set_poses(const std::vector<Pose>& poses) {
+    (void)poses;
+    return false;
+  }
+  // Collides the terrain with every body (of shape `only`, if given) `repeats` times at the
+  // current poses, making no joints; the time per kind, as collision_breakdown.
+  virtual std::vector<PairKindTime> replay_terrain_pairs(int repeats, const Shape* only = nullptr) {
+    (void)repeats, (void)only;
+    return {};
+  }
   // What handles the triangle meshes, for the summary.
   virtual std::string midphase_description() const = 0;
 };

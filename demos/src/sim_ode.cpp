@@ -5,7 +5,9 @@
 //            adapter, which needs their points.
 #include <ode/ode.h>
 
+#include <algorithm>
 #include <chrono>
+#include <unordered_map>
 
 #include "boxtree/error.h"
 #include "sim.h"
@@ -96,6 +98,7 @@ class OdeSimulation final : public Simulation {
           dMassSetBoxTotal(&mass, m, 2 * spec.half_extents.x(), 2 * spec.half_extents.y(), 2 * spec.half_extents.z());
           break;
       }
+      shape_of_[geom] = spec.shape;
       dBodySetMass(body, &mass);
       dGeomSetBody(geom, body);
       dBodySetPosition(body, spec.position.x(), spec.position.y(), spec.position.z());
@@ -150,6 +153,41 @@ class OdeSimulation final : public Simulation {
       for (dGeomID geom : mesh_geoms_) total += boxtree::ode::geom_counters(geom).candidate_facets;
 #endif
     return total;
+  }
+  std::vector<PairKindTime> collision_breakdown() const override {
+    std::vector<PairKindTime> out;
+    for (int k = 0; k < kPairKinds; ++k) {
+      if (pair_time_[k].calls == 0) continue;
+      PairKindTime t = pair_time_[k];
+      t.kind = k == kBodyBody ? "body-body" : std::string("terrain-") + shape_name(Shape(k));
+      out.push_back(t);
+    }
+    return out;
+  }
+  bool set_poses(const std::vector<Pose>& poses) override {
+    if (poses.size() != bodies_.size()) return false;
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      const Pose& pose = poses[i];
+      dBodySetPosition(bodies_[i], pose.position.x(), pose.position.y(), pose.position.z());
+      const dQuaternion q = {pose.orientation.w(), pose.orientation.x(), pose.orientation.y(), pose.orientation.z()};
+      dBodySetQuaternion(bodies_[i], q);
+      dBodySetLinearVel(bodies_[i], 0, 0, 0);
+      dBodySetAngularVel(bodies_[i], 0, 0, 0);
+    }
+    dReal box[6];
+    for (const auto& entry : shape_of_) dGeomGetAABB(entry.first, box);  // recomputed for the moved geoms
+    return true;
+  }
+  std::vector<PairKindTime> replay_terrain_pairs(int repeats, const Shape* only) override {
+    PairKindTime saved[kPairKinds];
+    std::copy(std::begin(pair_time_), std::end(pair_time_), std::begin(saved));
+    std::fill(std::begin(pair_time_), std::end(pair_time_), PairKindTime{});
+    for (int r = 0; r < repeats; ++r)
+      for (const auto& [geom, shape] : shape_of_)
+        if (!only || shape == *only) timed_collide(terrain_, geom);
+    std::vector<PairKindTime> out = collision_breakdown();
+    std::copy(std::begin(saved), std::end(saved), std::begin(pair_time_));
+    return out;
   }
   std::string midphase_description() const override {
     return boxtree_ ? "dCreateBoxtreeMesh (terrain and meshes)" : "dCreateTriMesh, OPCODE (terrain and meshes)";
@@ -222,7 +260,7 @@ class OdeSimulation final : public Simulation {
     dBodyID body_a = dGeomGetBody(a), body_b = dGeomGetBody(b);
     if (!body_a && !body_b) return;
     dContact contact[kMaxContactsPerPair];
-    const int n = dCollide(a, b, kMaxContactsPerPair, &contact[0].geom, sizeof(dContact));
+    const int n = timed_collide(a, b, contact);
     for (int i = 0; i < n; ++i) {
       contact[i].surface.mode = dContactApprox1 | dContactRolling;
       contact[i].surface.mu = 0.6;
@@ -235,7 +273,48 @@ class OdeSimulation final : public Simulation {
     contacts_ += n;
   }
 
+  // dCollide(a, b), its time, contacts and triangles added to pair_time_.
+  int timed_collide(dGeomID a, dGeomID b, dContact* contact = nullptr) {
+    dContact scratch[kMaxContactsPerPair];
+    if (!contact) contact = scratch;
+    const std::uint64_t triangles_before = pair_triangles(a, b);
+    const auto start = std::chrono::steady_clock::now();
+    const int n = dCollide(a, b, kMaxContactsPerPair, &contact[0].geom, sizeof(dContact));
+    PairKindTime& time = pair_time_[pair_kind(a, b)];
+    time.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++time.calls;
+    time.contacts += std::uint64_t(n);
+    time.triangles += pair_triangles(a, b) - triangles_before;
+    return n;
+  }
+
+  // The index into pair_time_: the body's shape for a pair with the terrain, else kBodyBody.
+  static constexpr int kBodyBody = int(Shape::mesh) + 1, kPairKinds = kBodyBody + 1;
+  int pair_kind(dGeomID a, dGeomID b) const {
+    if (a != terrain_ && b != terrain_) return kBodyBody;
+    const auto it = shape_of_.find(a == terrain_ ? b : a);
+    return it == shape_of_.end() ? kBodyBody : int(it->second);
+  }
+
+  // The narrowphase triangles counted so far for the meshes of the pair (a, b).
+  std::uint64_t pair_triangles(dGeomID a, dGeomID b) const {
+    if (!boxtree_) return builtin_triangles_;
+    std::uint64_t total = 0;
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    for (dGeomID g : {a, b}) {
+      const auto it = shape_of_.find(g);
+      if (g == terrain_ || (it != shape_of_.end() && it->second == Shape::mesh))
+        total += boxtree::ode::geom_counters(g).candidate_facets;
+    }
+#else
+    (void)a, (void)b;
+#endif
+    return total;
+  }
+
   bool boxtree_;
+  std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
+  PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;
   dSpaceID space_ = nullptr;
   dJointGroupID contacts_group_ = nullptr;
