@@ -186,6 +186,56 @@ TEST(PackedTree, CollideMatchesBruteForce) {
   EXPECT_GT(check_collide(soup, a, 8, 0.5, "soup vs sphere"), 0u);
 }
 
+// A small body on a large mesh: collide gathers the large tree's facets in the body's root box
+// and walks the body's tree with each (packed_tree.cpp, collide_through_facets) instead of the
+// joint walk. Both orders of the trees, rotated and far from the origin, touching exactly at a
+// shared vertex, and stopping early.
+TEST(PackedTree, CollideSmallBodyOnLargeMesh) {
+  // 64 x 64 cells of 1 unit; bodies under a cell across (their root boxes hold a few dozen
+  // terrain facets, fewer than half their own facets).
+  const TriangleMesh terrain = make_terrain(64, 64, 3, 64, 4);
+  const TriangleMesh body = make_bumpy_sphere(16, 10, 0.2, 5);  // radius ~1: scaled below
+  for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(3e4, -2e4, 1e3)}) {
+    TriangleMesh ground = terrain;
+    for (Vec3& v : ground.vertices) v += offset;
+    TriangleMesh small = body;
+    for (Vec3& v : small.vertices) v *= 0.6;
+    const PackedAabbTree a(build_tree<Aabb>(ground));
+    const PackedAabbTree b(build_tree<Aabb>(small));
+    Random r(41);
+    std::size_t pairs = 0;
+    for (int pose = 0; pose < 40; ++pose) {
+      // Somewhere over the terrain, at its height there (a vertex's), sunk a little or not at all.
+      const Vec3& anchor = ground.vertices[r.next() % ground.vertices.size()];
+      RigidTransform t;
+      t.rotation = random_rotation(r);
+      t.translation = anchor + Vec3(0, 0, r.uniform(0.1, 0.7));
+      const std::vector<FacetPair> got = collide(a, b, t);
+      EXPECT_EQ(got, brute_collide(ground, small, t)) << "pose " << pose;
+      // The other order: b's facets first in each pair.
+      std::vector<FacetPair> swapped = collide(b, a, t.inverse());
+      for (FacetPair& p : swapped) std::swap(p.a, p.b);
+      std::sort(swapped.begin(), swapped.end());
+      EXPECT_EQ(swapped, got) << "pose " << pose << " (small tree first)";
+      pairs += got.size();
+      CollideSettings first;
+      first.stop_at_first = true;
+      EXPECT_EQ(collide(a, b, t, nullptr, first).size(), std::min<std::size_t>(1, got.size())) << "pose " << pose;
+    }
+    EXPECT_GT(pairs, 0u) << "the poses must make contact";
+    // Exactly touching: the body's lowest vertex on a terrain vertex, no rotation (exact).
+    std::size_t lowest = 0;
+    for (std::size_t i = 1; i < small.vertices.size(); ++i)
+      if (small.vertices[i].z() < small.vertices[lowest].z()) lowest = i;
+    const Vec3& target = ground.vertices[33 * 65 + 20];
+    const RigidTransform touching{Mat3::Identity(), target - small.vertices[lowest]};
+    ASSERT_EQ(touching.apply(small.vertices[lowest]), target);
+    const std::vector<FacetPair> touched = collide(a, b, touching);
+    EXPECT_EQ(touched, brute_collide(ground, small, touching));
+    EXPECT_FALSE(touched.empty()) << "touching counts";
+  }
+}
+
 TEST(PackedTree, UnboundedAndBadQueries) {
   const TriangleMesh mesh = make_terrain(16, 16, 2);
   const PackedAabbTree packed(build_tree<Aabb>(mesh));
