@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "boxtree/volume/obb.h"
+#include "internal.h"
 #include "query_internal.h"
 
 #if defined(__SSE2__)
@@ -594,8 +595,37 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
                  (mask & ~leaves);
         },
         leaf, sink.local);
+  } else if constexpr (std::is_same_v<Shape, Capsule>) {
+    // The capsule's own box (along its segment, the radius around it) culls on its face axes like
+    // an Obb query, four children at once; the exact capsule-box distance, several times dearer,
+    // only on leaf children that pass, and only when the caller asked for leaf volumes (the
+    // triangle test decides otherwise). The exact test on every child that passed the grid was
+    // half the time of an ODE capsule on the drop scene's terrain (pair_replay --only capsule:
+    // ~14 -> ~9.5 us per call, the same facets).
+    const Vec3 segment = shape.p1 - shape.p0;
+    const Real length = segment.norm();
+    Mat3 axes = Mat3::Identity();
+    if (length > 0 && std::isfinite(length)) {
+      Vec3 b1, b2;
+      detail::orthonormal_completion(segment / length, b1, b2);
+      axes.col(0) = segment / length;
+      axes.col(1) = b1;
+      axes.col(2) = b2;
+    }
+    const Vec3 half(length / 2 + shape.radius, shape.radius, shape.radius);
+    const GridObbAxes faces(tree, (shape.p0 + shape.p1) / 2, axes, (axes.transpose() * axes).cwiseAbs() * half);
+    walk(
+        tree,
+        [&](const PackedAabbTree::Node& node) {
+          const unsigned mask = faces.overlaps(node, grid.overlaps(node));
+          if (test == FacetTest::exact_triangle) return mask;
+          const unsigned leaves = mask & leaf_slots(node);
+          return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
+                 (mask & ~leaves);
+        },
+        leaf, sink.local);
   } else {
-    // Spheres and capsules: the exact box test (a distance) on the children that pass.
+    // Spheres: the exact box test (a distance) on the children that pass.
     walk(
         tree,
         [&](const PackedAabbTree::Node& node) {
