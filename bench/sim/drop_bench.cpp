@@ -14,6 +14,9 @@
 //                           collision_breakdown), the measure for ODE; the markdown also
 //                           splits it by the body's shape;
 //   step_ms                 the whole step (collision, solver, integration);
+//   bodies_fallen_through   bodies whose centre ended more than 1 m below the terrain's lowest
+//                           point: lost through the terrain (their pairs with it stop, so a
+//                           world that loses bodies also has less collision work left);
 //   build_seconds           creating the world, the terrain's hierarchy included.
 // Per-step figures are means over the steps after the first third (most bodies have landed).
 #include <CLI/CLI.hpp>
@@ -23,6 +26,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -46,7 +50,8 @@ struct Config {
 
 struct Measure {
   double contacts = 0, triangles = 0, collision_ms = 0, step_ms = 0, build_seconds = 0;
-  int min_body_height_ok = 1;
+  // Bodies whose centre ended more than 1 m below the terrain's lowest point: lost through it.
+  int fell_through = 0;
   // Per pair kind, over the measured steps, per step (empty for Bullet).
   std::vector<demo::Simulation::PairKindTime> breakdown;
   double terrain_ms = 0;  // the breakdown's terrain-* entries, ms per step
@@ -106,6 +111,9 @@ Measure run(const demo::Scene& scene, const std::string& engine, bool boxtree, c
   m.collision_ms = 1e3 * (sim->collision_seconds() - collision_before) / measured;
   m.step_ms = 1e3 * step_seconds / measured;
   m.measured_steps = measured;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& v : scene.terrain->vertices) lowest = std::min(lowest, v.z());
+  for (const demo::Pose& pose : sim->poses()) m.fell_through += pose.position.z() < lowest - 1;
   m.breakdown = per_step(breakdown_before, sim->collision_breakdown(), measured);
   for (const auto& k : m.breakdown)
     if (k.kind.rfind("terrain-", 0) == 0) m.terrain_ms += 1e3 * k.seconds;
@@ -237,8 +245,8 @@ int main(int argc, char** argv) {
         "boxes, capsules, cylinders, convex hulls, small meshes) dropped in layers; "
      << steps << " steps of 1/60 s, means over the last two thirds. CPU: " << cpu_model() << ".\n\n";
   md << "| engine | terrain | bodies | midphase | contacts/step | narrowphase tri/step | collision ms/step | step ms | "
-        "build s | collision ratio | step ratio | contacts ratio | triangles ratio |\n";
-  md << "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "build s | fell through | collision ratio | step ratio | contacts ratio | triangles ratio |\n";
+  md << "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   // ODE's collision time by pair kind, one table per scene, appended after the main table.
   std::ostringstream breakdown_md;
   char buf[512];
@@ -252,13 +260,13 @@ int main(int argc, char** argv) {
                                     std::to_string(scene.terrain->facet_count()) + " facets), " +
                                     std::to_string(config.bodies) + " bodies";
       const Measure builtin = run(scene, engine, false, "", steps);
-      std::snprintf(buf, sizeof buf, "| %s | %d^2 | %d | %s | %.1f | %.0f | %.3f | %.3f | %.2f | | | | |\n", engine.c_str(),
-                    config.cells, config.bodies, peer.c_str(), builtin.contacts, builtin.triangles, builtin.collision_ms,
-                    builtin.step_ms, builtin.build_seconds);
+      std::snprintf(buf, sizeof buf, "| %s | %d^2 | %d | %s | %.1f | %.0f | %.3f | %.3f | %.2f | %d | | | | |\n",
+                    engine.c_str(), config.cells, config.bodies, peer.c_str(), builtin.contacts, builtin.triangles,
+                    builtin.collision_ms, builtin.step_ms, builtin.build_seconds, builtin.fell_through);
       md << buf;
-      std::printf("%s: %s contacts %.1f triangles %.0f collision %.3f ms step %.3f ms build %.2f s\n", case_name.c_str(),
-                  peer.c_str(), builtin.contacts, builtin.triangles, builtin.collision_ms, builtin.step_ms,
-                  builtin.build_seconds);
+      std::printf("%s: %s contacts %.1f triangles %.0f collision %.3f ms step %.3f ms build %.2f s fell through %d\n",
+                  case_name.c_str(), peer.c_str(), builtin.contacts, builtin.triangles, builtin.collision_ms,
+                  builtin.step_ms, builtin.build_seconds, builtin.fell_through);
       std::fflush(stdout);
       const std::vector<std::string> run_methods = config.all_methods ? methods : std::vector<std::string>{"aabb"};
       std::vector<std::pair<std::string, Measure>> breakdowns;
@@ -275,6 +283,7 @@ int main(int argc, char** argv) {
                        {"collision_ms_per_step", ours.collision_ms, builtin.collision_ms},
                        {"terrain_collide_ms_per_step", ours.terrain_ms, builtin.terrain_ms},
                        {"step_ms", ours.step_ms, builtin.step_ms},
+                       {"bodies_fallen_through", double(ours.fell_through), double(builtin.fell_through)},
                        {"build_seconds", ours.build_seconds, builtin.build_seconds}};
         for (const auto& m : metrics) {
           if (std::string(m.metric) == "terrain_collide_ms_per_step" && (ours.breakdown.empty() || builtin.breakdown.empty()))
@@ -289,16 +298,19 @@ int main(int argc, char** argv) {
                           {"ratio", ratio(m.ours, m.theirs)}});
         }
         std::snprintf(buf, sizeof buf,
-                      "| %s | %d^2 | %d | boxtree %s | %.1f | %.0f | %.3f | %.3f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
+                      "| %s | %d^2 | %d | boxtree %s | %.1f | %.0f | %.3f | %.3f | %.2f | %d | %.2f | %.2f | %.2f | %.2f |\n",
                       engine.c_str(), config.cells, config.bodies, method.c_str(), ours.contacts, ours.triangles,
-                      ours.collision_ms, ours.step_ms, ours.build_seconds, ratio(ours.collision_ms, builtin.collision_ms),
+                      ours.collision_ms, ours.step_ms, ours.build_seconds, ours.fell_through,
+                      ratio(ours.collision_ms, builtin.collision_ms),
                       ratio(ours.step_ms, builtin.step_ms), ratio(ours.contacts, builtin.contacts),
                       ratio(ours.triangles, builtin.triangles));
         md << buf;
-        std::printf("%s: boxtree %s contacts %.1f triangles %.0f collision %.3f ms (%.2fx) step %.3f ms (%.2fx) build %.2f s\n",
-                    case_name.c_str(), method.c_str(), ours.contacts, ours.triangles, ours.collision_ms,
-                    ratio(ours.collision_ms, builtin.collision_ms), ours.step_ms, ratio(ours.step_ms, builtin.step_ms),
-                    ours.build_seconds);
+        std::printf(
+            "%s: boxtree %s contacts %.1f triangles %.0f collision %.3f ms (%.2fx) step %.3f ms (%.2fx) build %.2f s fell "
+            "through %d\n",
+            case_name.c_str(), method.c_str(), ours.contacts, ours.triangles, ours.collision_ms,
+            ratio(ours.collision_ms, builtin.collision_ms), ours.step_ms, ratio(ours.step_ms, builtin.step_ms),
+            ours.build_seconds, ours.fell_through);
         std::fflush(stdout);
       }
       if (breakdowns.size() > 1) write_breakdown(breakdown_md, engine, config, breakdowns);
