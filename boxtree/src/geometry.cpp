@@ -300,19 +300,32 @@ bool detail::boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const V
 // ---------------------------------------------------------------------------------------------
 // Ray / triangle
 
-bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const Vec3& c, TriangleHit& hit) {
-  const Vec3& dir = ray.direction;
+RayShear ray_shear(const Vec3& dir) {
   // Sec. 3.1: the dominant direction axis becomes z; swapping x and y for a negative z keeps the
   // winding (only a culling test would care, but it costs nothing).
+  RayShear s;
   const Vec3 abs_dir = dir.cwiseAbs();
-  const int kz = abs_dir.x() >= abs_dir.y() ? (abs_dir.x() >= abs_dir.z() ? 0 : 2) : (abs_dir.y() >= abs_dir.z() ? 1 : 2);
-  if (!(abs_dir[kz] > 0)) return false;  // zero or NaN direction
-  int kx = (kz + 1) % 3;
-  int ky = (kx + 1) % 3;
-  if (dir[kz] < 0) std::swap(kx, ky);
-  const Real shear_x = dir[kx] / dir[kz];
-  const Real shear_y = dir[ky] / dir[kz];
-  const Real shear_z = 1 / dir[kz];
+  s.kz = abs_dir.x() >= abs_dir.y() ? (abs_dir.x() >= abs_dir.z() ? 0 : 2) : (abs_dir.y() >= abs_dir.z() ? 1 : 2);
+  if (!(abs_dir[s.kz] > 0)) return s;  // zero or NaN direction
+  s.kx = (s.kz + 1) % 3;
+  s.ky = (s.kx + 1) % 3;
+  if (dir[s.kz] < 0) std::swap(s.kx, s.ky);
+  s.shear_x = dir[s.kx] / dir[s.kz];
+  s.shear_y = dir[s.ky] / dir[s.kz];
+  s.shear_z = 1 / dir[s.kz];
+  s.valid = true;
+  return s;
+}
+
+bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const Vec3& c, TriangleHit& hit) {
+  return intersect_ray_triangle(ray, ray_shear(ray.direction), a, b, c, hit);
+}
+
+bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a, const Vec3& b, const Vec3& c,
+                            TriangleHit& hit) {
+  if (!shear.valid) return false;
+  const int kx = shear.kx, ky = shear.ky, kz = shear.kz;
+  const Real shear_x = shear.shear_x, shear_y = shear.shear_y, shear_z = shear.shear_z;
 
   // Vertices relative to the origin, sheared so that the ray becomes the +z axis. Each vertex is
   // transformed by the same expression regardless of the triangle, so shared vertices agree.

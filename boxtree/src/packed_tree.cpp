@@ -388,8 +388,8 @@ struct GridRay {
 
   GridRay(const PackedAabbTree& tree, const Ray& ray, Real t_first) : base(t_first) {
     const Vec3 start = ray.origin + t_first * ray.direction;
-    Vec3 o = (start - tree.origin()).cwiseQuotient(tree.step());
-    Vec3 d = ray.direction.cwiseQuotient(tree.step());
+    Vec3 o = (start - tree.origin()).cwiseProduct(tree.inv_step());  // rounding: far below the grid steps
+    Vec3 d = ray.direction.cwiseProduct(tree.inv_step());
     scale = 1 / std::max(d.cwiseAbs().maxCoeff(), std::numeric_limits<Real>::min());
     d *= scale;
     for (int i = 0; i < 3; ++i) {
@@ -456,23 +456,26 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
   float s_max = grid.s_up(t_max);
   const PackedAabbTree::Node* nodes = tree.nodes().data();
 
+  // Entries keep where the ray enters them in grid units (s, single precision: half the stack
+  // of a double t, and no conversion per child); s_max is t_max rounded up, so the pruning
+  // against it is conservative.
   struct Entry {
     std::uint32_t link;
-    Real t_enter;
+    float s_enter;
   };
   Entry stack[kStackSize];
   int top = 0;
-  stack[top++] = {tree.root_link(), t_enter};
+  stack[top++] = {tree.root_link(), s_min};
   while (top > 0) {
     const Entry entry = stack[--top];
-    if (entry.t_enter > t_max) continue;  // a closer hit was found since this was pushed
+    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);  // only when a hit shortened the ray
+    if (entry.s_enter > s_max) continue;  // a closer hit was found since this was pushed
     ++stats.nodes_visited;
     if (PackedAabbTree::is_leaf(entry.link)) {
       if (!leaf(PackedAabbTree::facet(entry.link), t_max)) return;
       continue;
     }
     const PackedAabbTree::Node& node = nodes[entry.link];
-    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);  // only when a hit shortened the ray
     float s_enter[kWidth];
     unsigned mask = grid.hits(node, s_min, s_max, s_enter);
     stats.volume_tests += kWidth;
@@ -486,10 +489,10 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
       const std::uint32_t link = node.link[slot];
       if (link == PackedAabbTree::kEmpty) continue;
       if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes[link]);
-      const Real t = std::max(grid.t_of(s_enter[slot]), ray.t_min);
+      const float s = s_enter[slot];  // at least s_min: hits() starts from it
       int k = count++;
-      for (; k > 0 && hits[k - 1].t_enter > t; --k) hits[k] = hits[k - 1];
-      hits[k] = {link, t};
+      for (; k > 0 && hits[k - 1].s_enter > s; --k) hits[k] = hits[k - 1];
+      hits[k] = {link, s};
     }
     for (int k = count - 1; k >= 0; --k) stack[top++] = hits[k];
   }
@@ -500,6 +503,7 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
 std::optional<RayHit> ray_closest_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
   StatsSink sink(stats);
   std::optional<RayHit> best;
+  const RayShear shear = ray_shear(ray.direction);
   ordered_ray_walk(
       tree, ray,
       [&](FacetId f, Real& t_max) {
@@ -508,7 +512,7 @@ std::optional<RayHit> ray_closest_hit(const PackedAabbTree& tree, const Ray& ray
         TriangleHit hit;
         Ray clipped = ray;
         clipped.t_max = t_max;
-        if (intersect_ray_triangle(clipped, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
+        if (intersect_ray_triangle(clipped, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
           if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
           t_max = std::min(t_max, best->t);
         }
@@ -535,13 +539,14 @@ void ray_all_hits(const PackedAabbTree& tree, const Ray& ray, FunctionRef<bool(c
                   QueryStats* stats) {
   // Every hit: the ordered walk without ever shortening the ray.
   StatsSink sink(stats);
+  const RayShear shear = ray_shear(ray.direction);
   ordered_ray_walk(
       tree, ray,
       [&](FacetId f, Real&) {
         ++sink.local.leaf_tests;
         const TriangleMesh& mesh = tree.mesh();
         TriangleHit hit;
-        if (!intersect_ray_triangle(ray, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
         return visit(RayHit{f, hit.t, hit.u, hit.v});
       },
       sink.local);

@@ -95,6 +95,7 @@ std::optional<RayHit> closest_hit_of(const View& tree, const Ray& ray, QueryStat
   StatsSink sink(stats);
   const TriangleMesh* mesh = tree.empty() ? nullptr : &tree.mesh();
   std::optional<RayHit> best;
+  const RayShear shear = ray_shear(ray.direction);
   ordered_ray_walk(
       tree, ray,
       [&](FacetId f, Real t_max) {
@@ -102,7 +103,7 @@ std::optional<RayHit> closest_hit_of(const View& tree, const Ray& ray, QueryStat
         TriangleHit hit;
         Ray clipped = ray;
         clipped.t_max = t_max;
-        if (intersect_ray_triangle(clipped, mesh->corner(f, 0), mesh->corner(f, 1), mesh->corner(f, 2), hit)) {
+        if (intersect_ray_triangle(clipped, shear, mesh->corner(f, 0), mesh->corner(f, 1), mesh->corner(f, 2), hit)) {
           if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
         }
         return best ? best->t : t_max;
@@ -129,12 +130,13 @@ void all_hits_of(const View& tree, const Ray& ray, FunctionRef<bool(const RayHit
   if (tree.empty() || !is_valid(ray)) return;
   const TriangleMesh& mesh = tree.mesh();
   const RayPrecomputed pre(ray);
+  const RayShear shear = ray_shear(ray.direction);
   walk(
       tree, [&](const auto& v) { return intersect_ray(v, pre, ray.t_min, ray.t_max); },
       [&](FacetId f) {
         ++sink.local.leaf_tests;
         TriangleHit hit;
-        if (!intersect_ray_triangle(ray, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
         return visit(RayHit{f, hit.t, hit.u, hit.v});
       },
       sink.local);

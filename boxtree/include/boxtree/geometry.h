@@ -21,6 +21,18 @@ struct TriangleHit {
 // corners are inclusive. Degenerate triangles are never hit. On a hit fills `hit`.
 bool intersect_ray_triangle(const Ray& ray, const Vec3& a, const Vec3& b, const Vec3& c, TriangleHit& hit);
 
+// The part of that test that depends on the ray's direction only (the axis permutation and the
+// shear that turn the ray into +z), computed once for the many triangles of a tree walk. The
+// overload below gives bit for bit the answer of the one above.
+struct RayShear {
+  int kx = 0, ky = 1, kz = 2;
+  Real shear_x = 0, shear_y = 0, shear_z = 0;
+  bool valid = false;  // false for a zero or NaN direction: nothing is hit
+};
+RayShear ray_shear(const Vec3& direction);
+bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a, const Vec3& b, const Vec3& c,
+                            TriangleHit& hit);
+
 // Triangle/triangle intersection (closed: touching at a point counts). Handles coplanar and
 // degenerate triangles (Guigue & Devillers 2003, with coplanar and degenerate fallbacks).
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
