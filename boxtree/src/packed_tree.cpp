@@ -455,6 +455,7 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
   Real t_of_s_max = t_max;
   float s_max = grid.s_up(t_max);
   const PackedAabbTree::Node* nodes = tree.nodes().data();
+  const Triangle* triangles = tree.mesh().triangles.data();
 
   // Entries keep where the ray enters them in grid units (s, single precision: half the stack
   // of a double t, and no conversion per child); s_max is t_max rounded up, so the pruning
@@ -488,7 +489,10 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
       mask &= mask - 1;
       const std::uint32_t link = node.link[slot];
       if (link == PackedAabbTree::kEmpty) continue;
+      // Start loading what the child will need: its node, or a leaf's vertex indices (the
+      // vertices themselves depend on them).
       if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes[link]);
+      else __builtin_prefetch(&triangles[PackedAabbTree::facet(link)]);
       const float s = s_enter[slot];  // at least s_min: hits() starts from it
       int k = count++;
       for (; k > 0 && hits[k - 1].s_enter > s; --k) hits[k] = hits[k - 1];
