@@ -586,43 +586,34 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
   if constexpr (std::is_same_v<Shape, Aabb>) {
     walk(
         tree, [&](const PackedAabbTree::Node& node) { return grid.overlaps(node); }, leaf, sink.local);
-  } else if constexpr (std::is_same_v<Shape, Obb>) {
-    // Then the box's own face axes, in float on the grid. An inner child that passes all six
-    // face axes is entered (the edge axes would cull few more, at twice the cost); a leaf child
-    // gets the exact box test only when the caller asked for leaf volumes, since the triangle
-    // test decides otherwise.
-    // (The radii allow for axes that are not quite orthonormal.)
-    const GridObbAxes faces(tree, shape.center, shape.axes,
-                            (shape.axes.transpose() * shape.axes).cwiseAbs() * shape.half_extents);
-    walk(
-        tree,
-        [&](const PackedAabbTree::Node& node) {
-          const unsigned mask = faces.overlaps(node, grid.overlaps(node));
-          if (test == FacetTest::exact_triangle) return mask;
-          const unsigned leaves = mask & leaf_slots(node);
-          return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
-                 (mask & ~leaves);
-        },
-        leaf, sink.local);
-  } else if constexpr (std::is_same_v<Shape, Capsule>) {
-    // The capsule's own box (along its segment, the radius around it) culls on its face axes like
-    // an Obb query, four children at once; the exact capsule-box distance, several times dearer,
-    // only on leaf children that pass, and only when the caller asked for leaf volumes (the
-    // triangle test decides otherwise). The exact test on every child that passed the grid was
-    // half the time of an ODE capsule on the drop scene's terrain (pair_replay --only capsule:
-    // ~14 -> ~9.5 us per call, the same facets).
-    const Vec3 segment = shape.p1 - shape.p0;
-    const Real length = segment.norm();
+  } else if constexpr (std::is_same_v<Shape, Obb> || std::is_same_v<Shape, Capsule>) {
+    // Then the box's own face axes (a capsule's box: along its segment, the radius around it), in
+    // float on the grid. An inner child that passes all six face axes is entered (the edge axes
+    // would cull few more, at twice the cost); a leaf child gets the exact test only when the
+    // caller asked for leaf volumes, since the triangle test decides otherwise. For capsules the
+    // exact capsule-box distance on every child that passed the grid was half the time of an ODE
+    // capsule on the drop scene's terrain (pair_replay --only capsule: ~14 -> ~9.5 us per call,
+    // the same facets). (The radii allow for axes that are not quite orthonormal.)
+    Vec3 center = Vec3::Zero(), half = Vec3::Zero();
     Mat3 axes = Mat3::Identity();
-    if (length > 0 && std::isfinite(length)) {
-      Vec3 b1, b2;
-      detail::orthonormal_completion(segment / length, b1, b2);
-      axes.col(0) = segment / length;
-      axes.col(1) = b1;
-      axes.col(2) = b2;
+    if constexpr (std::is_same_v<Shape, Obb>) {
+      center = shape.center;
+      axes = shape.axes;
+      half = shape.half_extents;
+    } else {
+      const Vec3 segment = shape.p1 - shape.p0;
+      const Real length = segment.norm();
+      if (length > 0 && std::isfinite(length)) {
+        Vec3 b1, b2;
+        detail::orthonormal_completion(segment / length, b1, b2);
+        axes.col(0) = segment / length;
+        axes.col(1) = b1;
+        axes.col(2) = b2;
+      }
+      center = (shape.p0 + shape.p1) / 2;
+      half = Vec3(length / 2 + shape.radius, shape.radius, shape.radius);
     }
-    const Vec3 half(length / 2 + shape.radius, shape.radius, shape.radius);
-    const GridObbAxes faces(tree, (shape.p0 + shape.p1) / 2, axes, (axes.transpose() * axes).cwiseAbs() * half);
+    const GridObbAxes faces(tree, center, axes, (axes.transpose() * axes).cwiseAbs() * half);
     walk(
         tree,
         [&](const PackedAabbTree::Node& node) {
