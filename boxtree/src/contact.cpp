@@ -7,7 +7,7 @@
 //    core touches the triangle, the separating axes of a segment against a triangle (the faces of
 //    their Minkowski difference: the triangle's normal and the three edge x segment crosses), which
 //    give the exact penetration depth of the core, plus the radius.
-//  * Box and triangle pairs: one shared separating-axis routine over a small polytope description
+//  * Box, convex polyhedra and triangle pairs: one shared separating-axis routine over a small polytope description
 //    (polytope_triangle below): every face normal of the Minkowski difference (the shape's faces,
 //    the triangle's normal, edge x edge crosses) is tried, so the least overlap is the exact
 //    penetration depth when the shapes overlap and a lower bound of the distance when they are
@@ -304,14 +304,10 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
 }
 
 // ---------------------------------------------------------------------------------------------
-// Polytope vs triangle (boxes, and triangle a of a triangle pair)
+// Polytope vs triangle (boxes, convex polyhedra, and triangle a of a triangle pair)
 
-// The half-space {x : normal . x <= offset}.
-struct HalfSpace {
-  Vec3 normal = Vec3::Zero();
-  Real offset = 0;
-  Real eval(const Vec3& x) const { return normal.dot(x) - offset; }
-};
+// The half-space {x : normal . x <= offset} (signed_distance_scaled(x) <= 0).
+using HalfSpace = Plane;
 
 struct PolytopeFace {
   Vec3 outward = Vec3::Zero();  // unit
@@ -459,6 +455,101 @@ Interval project(const TriangleFrame& tri, const Vec3& u) {
   return {std::min({x0, x1, x2}), std::max({x0, x1, x2})};
 }
 
+// A ConvexPolyhedron seen as the shape of the separating-axis routines below (the members they
+// read, as pointers into its arrays).
+struct PolyhedronFace {
+  Vec3 outward;
+  Real offset;
+  int side_count;
+  const HalfSpace* sides;
+};
+
+struct PolyhedronShape {
+  struct Faces {
+    const ConvexPolyhedron* p;
+    PolyhedronFace operator[](int f) const {
+      const int begin = p->face_begin[std::size_t(f)];
+      return {p->faces[std::size_t(f)].normal, p->faces[std::size_t(f)].offset,
+              p->face_begin[std::size_t(f) + 1] - begin, p->sides.data() + begin};
+    }
+  };
+
+  explicit PolyhedronShape(const ConvexPolyhedron& p)
+      : source(&p),
+        vertex_count(int(p.vertices.size())),
+        vertices(p.vertices.data()),
+        edge_count(int(p.edge_from.size())),
+        edge_from(p.edge_from.data()),
+        edge_to(p.edge_to.data()),
+        edge_direction(p.edge_direction.data()),
+        edge_cone(p.edge_cone.data()),
+        direction_count(int(p.directions.size())),
+        directions(p.directions.data()),
+        face_count(p.face_count()),
+        faces{&p},
+        bound_count(p.face_count()),
+        bounds(p.faces.data()),
+        center(p.center),
+        size(p.size),
+        coord(p.coord),
+        // Per triangle, the parallel classes cost 2 x 3 x classes projections of all corners,
+        // the cones 3 x edges tests of 3 dot products (and their branches) plus a projection
+        // per pair that passes. Measured on the drop scene's stretched icosahedra (15 classes,
+        // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call.
+        edges_by_cone(direction_count * (vertex_count + 3) > 8 * edge_count) {}
+
+  // The closest point of the surface (for a point outside: of the polyhedron), over the faces
+  // cut into fans of triangles.
+  Vec3 closest_point(const Vec3& x) const {
+    Vec3 best = vertices[0];
+    Real best_distance = kInf;
+    for (int f = 0; f < face_count; ++f) {
+      const int begin = source->face_begin[std::size_t(f)];
+      const int end = source->face_begin[std::size_t(f) + 1];
+      const Vec3& apex = vertices[source->loops[std::size_t(begin)]];
+      for (int k = begin + 1; k + 1 < end; ++k) {
+        const Vec3 y = closest_point_on_triangle(x, apex, vertices[source->loops[std::size_t(k)]],
+                                                 vertices[source->loops[std::size_t(k) + 1]]);
+        const Real d = (y - x).squaredNorm();
+        if (d < best_distance) {
+          best_distance = d;
+          best = y;
+        }
+      }
+    }
+    return best;
+  }
+
+  const ConvexPolyhedron* source;
+  int vertex_count;
+  const Vec3* vertices;
+  int edge_count;
+  const int* edge_from;
+  const int* edge_to;
+  const int* edge_direction;
+  const Vec3* edge_cone;
+  int direction_count;
+  const Vec3* directions;
+  int face_count;
+  Faces faces;
+  int bound_count;
+  const HalfSpace* bounds;
+  Vec3 center;
+  Real size;
+  Real coord;
+  bool edges_by_cone;
+};
+
+Interval project(const PolyhedronShape& p, const Vec3& u) {
+  Interval r;
+  for (int i = 0; i < p.vertex_count; ++i) {
+    const Real x = u.dot(p.vertices[i]);
+    r.lo = std::min(r.lo, x);
+    r.hi = std::max(r.hi, x);
+  }
+  return r;
+}
+
 enum class AxisKind { kTriangleFace, kShapeFace, kEdges };
 
 // A candidate normal N (from the triangle towards the shape) and the overlap along it: how far the
@@ -467,8 +558,9 @@ struct Axis {
   Vec3 normal = Vec3::UnitZ();
   Real overlap = kInf;
   AxisKind kind = AxisKind::kTriangleFace;
-  int shape_index = 0;     // face index, or edge direction
+  int shape_index = 0;     // face index, or edge direction (a polyhedron's: the edge)
   int triangle_index = 0;  // triangle edge
+  bool single_edge = false;  // shape_index is one edge of a polyhedron, not a parallel class
 };
 
 // Sutherland-Hodgman: keeps the part of the convex polygon inside the half-space.
@@ -477,8 +569,8 @@ int clip_polygon(const Vec3* in, int n, const HalfSpace& h, Vec3* out) {
   for (int i = 0; i < n; ++i) {
     const Vec3& cur = in[i];
     const Vec3& next = in[(i + 1) % n];
-    const Real dc = h.eval(cur);
-    const Real dn = h.eval(next);
+    const Real dc = h.signed_distance_scaled(cur);
+    const Real dn = h.signed_distance_scaled(next);
     if (dc <= 0) out[m++] = cur;
     if ((dc < 0 && dn > 0) || (dc > 0 && dn < 0)) out[m++] = cur + (dc / (dc - dn)) * (next - cur);
   }
@@ -493,7 +585,8 @@ constexpr int kScratchContacts = 48;
 // the prism, a shape edge crossing a prism wall, or a prism edge (the line through a triangle
 // corner along N) crossing the shape's boundary: all three kinds are generated, so the deepest
 // contact is exactly the directional penetration depth along N.
-int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
+template <class Shape>
+int triangle_face_contacts(const Shape& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
                            ContactPoint* out) {
   int count = 0;
   const Real plane = normal.dot(tri.v[0]);
@@ -532,7 +625,7 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     for (int k = 0; k < shape.bound_count; ++k) {
       // bound.normal . (v - t N) <= offset  <=>  -t (bound.normal . N) <= offset - bound.normal . v
       const Real rate = -shape.bounds[k].normal.dot(normal);
-      const Real room = -shape.bounds[k].eval(tri.v[j]);
+      const Real room = -shape.bounds[k].signed_distance_scaled(tri.v[j]);
       if (std::abs(rate) <= kEps) {
         if (room < -slack) t_hi = -kInf;
         continue;
@@ -552,10 +645,13 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
 }
 
 // Contacts for a face of the shape (outward f, N = -f): the triangle clipped to the face's
-// polygon prism, each point at its depth below the face plane.
-int shape_face_contacts(const PolytopeFace& face, const TriangleFrame& tri, ContactPoint* out) {
-  Vec3 buffer_a[16] = {tri.v[0], tri.v[1], tri.v[2]};
-  Vec3 buffer_b[16];
+// polygon prism, each point at its depth below the face plane. Clipping a triangle by k sides
+// leaves at most 3 + k corners; at most kScratchContacts are written.
+template <class Face>
+int shape_face_contacts(const Face& face, const TriangleFrame& tri, ContactPoint* out) {
+  constexpr int kBuffer = 3 + kMaxPolyhedronFaceCorners;
+  Vec3 buffer_a[kBuffer] = {tri.v[0], tri.v[1], tri.v[2]};
+  Vec3 buffer_b[kBuffer];
   Vec3* in = buffer_a;
   Vec3* next = buffer_b;
   int n = 3;
@@ -563,23 +659,39 @@ int shape_face_contacts(const PolytopeFace& face, const TriangleFrame& tri, Cont
     n = clip_polygon(in, n, face.sides[s], next);
     std::swap(in, next);
   }
+  n = std::min(n, kScratchContacts);
   for (int i = 0; i < n; ++i) out[i] = make_contact(in[i], -face.outward, face.offset - face.outward.dot(in[i]));
   return n;
 }
 
 // The closest points of the shape's supporting edge along direction k and the triangle's edge j.
-int edge_contacts(const Polytope& shape, const TriangleFrame& tri, const Axis& axis, ContactPoint* out) {
+template <class Shape>
+int edge_contacts(const Shape& shape, const TriangleFrame& tri, const Axis& axis, Real slack, ContactPoint* out) {
   int best = -1;
   Real best_height = kInf;
-  for (int e = 0; e < shape.edge_count; ++e) {
-    if (shape.edge_direction[e] != axis.shape_index) continue;
-    const Real height = axis.normal.dot(shape.vertices[shape.edge_from[e]] + shape.vertices[shape.edge_to[e]]);
-    if (height < best_height) {
-      best_height = height;
-      best = e;
+  if (axis.single_edge) {
+    best = axis.shape_index;
+    best_height = axis.normal.dot(shape.vertices[shape.edge_from[best]] + shape.vertices[shape.edge_to[best]]);
+  } else {
+    for (int e = 0; e < shape.edge_count; ++e) {
+      if (shape.edge_direction[e] != axis.shape_index) continue;
+      const Real height = axis.normal.dot(shape.vertices[shape.edge_from[e]] + shape.vertices[shape.edge_to[e]]);
+      if (height < best_height) {
+        best_height = height;
+        best = e;
+      }
     }
   }
   if (best < 0) return 0;
+  // Both edges must be where the projections meet (the shape's lowest and the triangle's highest
+  // along N). A box always has such an edge in each direction class; a general polyhedron need
+  // not, and an axis without it is no edge-edge feature pair (it can be the least axis only when
+  // the rule "the triangle's normal on the side of the centre" leaves the true least one out).
+  const Vec3& j0 = tri.v[axis.triangle_index];
+  const Vec3& j1 = tri.v[(axis.triangle_index + 1) % 3];
+  if (best_height / 2 > project(shape, axis.normal).lo + slack ||
+      std::min(axis.normal.dot(j0), axis.normal.dot(j1)) < project(tri, axis.normal).hi - slack)
+    return 0;
   // Where the two edges cross when seen along N: the closest points of their lines (the segment
   // between them is along N). When the edge pair is the least axis both lie on the edges and
   // position - N * depth is exactly on the shape's edge; when they do not (an edge axis that is
@@ -610,7 +722,8 @@ struct PolytopeTrianglePair {
   Real distance_squared = kInf;
 };
 
-PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const TriangleFrame& tri) {
+template <class Shape>
+PolytopeTrianglePair closest_polytope_triangle(const Shape& shape, const TriangleFrame& tri) {
   PolytopeTrianglePair best;
   const auto consider = [&](const Vec3& x, const Vec3& y) {
     const Real d2 = (x - y).squaredNorm();
@@ -657,7 +770,8 @@ PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const Tria
 // the normal, and the contacts come from the features of that axis. Apart: the exact closest pair
 // decides, and the axis' features are used only when its gap is the distance (a face over a
 // vertex, crossing edges), so that a face hovering over a face still gets a patch.
-int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const ContactOptions& options,
+template <class Shape>
+int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const ContactOptions& options,
                       int max_contacts, ContactPoint* out) {
   const Real size = std::max(shape.size, tri.size);
   const Real slack = tolerance(size, std::max(shape.coord, tri.coord));
@@ -689,24 +803,67 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
     const Real sigma = center_side >= 0 ? 1 : -1;
     consider(best_tri_face, {sigma * tri.normal, sigma > 0 ? up : down, AxisKind::kTriangleFace, 0, 0});
   }
+  // Apart by more than the margin along any axis: no contact, the other axes need not be tried
+  // (most candidates of a query volume are apart along the triangle's normal or a face's).
+  if (separation > margin) return 0;
   for (int f = 0; f < shape.face_count; ++f) {
     const Vec3 n = -shape.faces[f].outward;
     const auto [ov, reverse] = overlaps_both_ways(n);
     separation = std::max(separation, -std::min(ov, reverse));
+    if (separation > margin) return 0;
     consider(best_face, {n, ov, AxisKind::kShapeFace, f, 0});
   }
-  for (int k = 0; k < shape.direction_count; ++k) {
-    for (int j = 0; j < 3; ++j) {
-      const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
-      const Vec3 u = shape.directions[k].cross(e);
-      const Real len = u.norm();
-      // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
-      if (!(len > 1e-6 * e.norm())) continue;
-      const Vec3 n = u / len;
-      const auto [plus, minus] = overlaps_both_ways(n);
-      separation = std::max(separation, -std::min(plus, minus));
-      consider(best_edge, {n, plus, AxisKind::kEdges, k, j});
-      consider(best_edge, {-n, minus, AxisKind::kEdges, k, j});
+  // Edge pairs: by parallel class (a box's 3, both directions of each cross: the lowest edge of
+  // the class is the contact), or, for a polyhedron with many classes, edge by edge through the
+  // normal cones: only the pairs that are faces of the Minkowski difference (on the Gauss map,
+  // the arc of the shape edge's cone crosses the half circle of the triangle edge's), each in its
+  // one direction. With u = d x t (d: the shape's edge, t: the triangle's), the shape's outward
+  // normal at the edge must be +-u = s a1 + r a2 with s, r >= 0 (a1, a2: its faces' normals), and
+  // the triangle's edge its support along N = -(+-u), i.e. N . (t x n) >= 0, which is
+  // +-(d . n) >= 0; edge_cone makes the first test three dot products. The other crosses are
+  // never the least overlap nor the only separating axis.
+  bool by_cone = false;
+  if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
+    by_cone = shape.edges_by_cone;
+    if (by_cone) {
+      Vec3 edges[3];
+      for (int j = 0; j < 3; ++j) edges[j] = tri.v[(j + 1) % 3] - tri.v[j];
+      for (int k = 0; k < shape.edge_count; ++k) {
+        const Vec3* cone = shape.edge_cone + 3 * k;
+        const Vec3 d = shape.vertices[shape.edge_to[k]] - shape.vertices[shape.edge_from[k]];
+        // A degenerate triangle has no sides: every pair in the shape's cone is kept.
+        const Real dn = tri.degenerate ? Real(0) : d.dot(tri.normal);
+        for (int j = 0; j < 3; ++j) {
+          const Real sign = edges[j].dot(cone[0]) < 0 ? Real(-1) : Real(1);
+          if (sign * edges[j].dot(cone[1]) < 0 || sign * edges[j].dot(cone[2]) < 0 || sign * dn < 0) continue;
+          const Vec3 u = sign * d.cross(edges[j]);
+          const Real len = u.norm();
+          // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
+          if (!(len > 1e-6 * edges[j].norm() * d.norm())) continue;
+          const Vec3 n = -u / len;
+          const Real overlap = overlap_along(n);
+          separation = std::max(separation, -overlap);
+          if (separation > margin) return 0;
+          consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
+        }
+      }
+    }
+  }
+  if (!by_cone) {
+    for (int k = 0; k < shape.direction_count; ++k) {
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
+        const Vec3 u = shape.directions[k].cross(e);
+        const Real len = u.norm();
+        // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
+        if (!(len > 1e-6 * e.norm())) continue;
+        const Vec3 n = u / len;
+        const auto [plus, minus] = overlaps_both_ways(n);
+        separation = std::max(separation, -std::min(plus, minus));
+        if (separation > margin) return 0;
+        consider(best_edge, {n, plus, AxisKind::kEdges, k, j});
+        consider(best_edge, {-n, minus, AxisKind::kEdges, k, j});
+      }
     }
   }
   if (separation > margin || !(separation == separation)) return 0;
@@ -728,9 +885,11 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
 
   // One-sided: a shape behind the plane, or whose natural normal points behind it, is pushed out
   // through the front face by its directional penetration, if it overlaps at all.
+  bool pushed_out = false;
   if (one_sided && (center_side < 0 || chosen.normal.dot(tri.normal) < -kBehind)) {
     if (apart) return 0;
     chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
+    pushed_out = true;
   } else if (apart) {
     const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
     const Real distance = std::sqrt(pair.distance_squared);
@@ -749,7 +908,7 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
     switch (axis.kind) {
       case AxisKind::kTriangleFace: return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
       case AxisKind::kShapeFace: return shape_face_contacts(shape.faces[axis.shape_index], tri, scratch.data());
-      case AxisKind::kEdges: return edge_contacts(shape, tri, axis, scratch.data());
+      case AxisKind::kEdges: return edge_contacts(shape, tri, axis, slack, scratch.data());
     }
     return 0;
   };
@@ -757,6 +916,34 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   if (count == 0 && chosen.kind == AxisKind::kEdges && face_choice.overlap < kInf) {
     chosen = face_choice;
     count = generate(chosen);
+  } else if (count == 0 && chosen.kind == AxisKind::kShapeFace && !pushed_out && best_edge.overlap < kInf) {
+    // The face was preferred over a slightly smaller edge overlap, but the triangle is not over
+    // it (a general polyhedron's face can be narrow): the edge pair is the contact.
+    chosen = best_edge;
+    count = generate(chosen);
+  }
+  if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
+    // A box is the prism over each of its faces, so a face's patch always holds the triangle's
+    // deepest point along its normal. A general polyhedron is not: part of the triangle can be
+    // inside it beyond the face's polygon, under a neighbouring face, and the patch then falls
+    // short of the axis' overlap (moving by its depth would not separate). Then the edge pair
+    // carries the contact if it is exact, else the triangle's face (its patch is the directional
+    // depth along the triangle's normal, over the whole triangle).
+    const auto reaches = [&](const Axis& axis, int n) {
+      Real deepest = -kInf;
+      for (int i = 0; i < n; ++i) deepest = std::max(deepest, scratch[i].depth);
+      return deepest >= axis.overlap - (1e-9 * size + slack);
+    };
+    if (chosen.kind == AxisKind::kShapeFace && !reaches(chosen, count)) {
+      int edge_count = best_edge.overlap < kInf ? generate(best_edge) : 0;
+      if (edge_count > 0) {
+        chosen = best_edge;
+        count = edge_count;
+      } else if (best_tri_face.overlap < kInf) {
+        chosen = best_tri_face;
+        count = generate(chosen);
+      }
+    }
   }
   int kept = 0;
   for (int i = 0; i < count; ++i) {
@@ -1125,6 +1312,16 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
     last_box = box;
   }
   return polytope_triangle(last_polytope, tri, options, kMaxBoxTriangleContacts, out);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Convex polyhedra
+
+int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
+                                const ContactOptions& options, ContactPoint* out) {
+  if (!finite(a, b, c) || polyhedron.vertices.empty() || !polyhedron.center.allFinite()) return 0;
+  return polytope_triangle(PolyhedronShape(polyhedron), TriangleFrame(a, b, c), options,
+                           kMaxPolyhedronTriangleContacts, out);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -242,7 +242,7 @@ class OdeSimulation final : public Simulation {
     dGeomID geom = nullptr;
     if (boxtree_) {
 #if BOXTREE_DEMO_HAVE_ODE_ADAPTER
-      // The adapter keeps its own copy of the points (ODE has no getter for them).
+      // The adapter keeps its own copy of the points and faces (ODE has no getter for them).
       geom = boxtree::ode::create_convex(space_, data->planes.data(), planes, data->points.data(), points,
                                          data->polygons.data());
       convex_geoms_.push_back(geom);

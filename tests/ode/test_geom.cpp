@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <vector>
 
+#include "boxtree/error.h"
 #include "boxtree/generate.h"
 #include "boxtree/ode/boxtree_geom.h"
 #include "ode_scene.h"
@@ -472,17 +474,67 @@ TEST(OdeGeom, ConvexWithRegisteredPoints) {
   dGeomID convex = boxtree::ode::create_convex(space.id, planes, 6, points, 8, polygons);
   dGeomSetPosition(convex, 0.1, 0.2, 0.45);
   std::vector<dContactGeom> out;
+  // With the faces (create_convex = set_convex): the separating-axis narrowphase, whose face case
+  // is a patch: the cube's bottom corners and the grid corners under it, all 0.05 deep.
+  ASSERT_GE(collide(mesh, convex, out, 8), 4);
+  for (const dContactGeom& g : out) {
+    EXPECT_NEAR(g.depth, 0.05, 1e-9);
+    EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-9);
+  }
+  ASSERT_GE(collide(convex, mesh, out, 8), 4);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, 1)).norm(), 1e-9);
+  dGeomSetPosition(convex, 0.1, 0.2, 0.55);
+  EXPECT_EQ(collide(mesh, convex, out, 8), 0);
+  // Points only: GJK/EPA on their hull, one point per facet, the same depth.
+  boxtree::ode::set_convex_points(convex, points, 8);
+  dGeomSetPosition(convex, 0.1, 0.2, 0.45);
   ASSERT_GE(collide(mesh, convex, out, 8), 1);
   EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
   for (const dContactGeom& g : out) EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-6);
-  ASSERT_GE(collide(convex, mesh, out, 8), 1);
-  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, 1)).norm(), 1e-6);
   dGeomSetPosition(convex, 0.1, 0.2, 0.55);
   EXPECT_EQ(collide(mesh, convex, out, 8), 0);
   // Forgotten (or never registered): no contacts, and no crash.
   boxtree::ode::forget_convex(convex);
   dGeomSetPosition(convex, 0.1, 0.2, 0.45);
   EXPECT_EQ(collide(mesh, convex, out, 8), 0);
+}
+
+// Convex data that is not a closed convex polyhedron with matching planes is refused with the
+// reason; create_convex then leaves nothing in the space.
+TEST(OdeGeom, ConvexWithBadFacesIsRefused) {
+  Space space;
+  static const dReal points[] = {0.5,  0.5,  0.5, -0.5, 0.5,  0.5, -0.5, -0.5, 0.5,  0.5,  -0.5, 0.5,
+                                 0.5,  0.5,  -0.5, -0.5, 0.5,  -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+  const std::vector<dReal> planes = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+  const std::vector<unsigned> polygons = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
+                                          4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  const auto refused = [&](const std::vector<dReal>& pl, const std::vector<unsigned>& po, unsigned plane_count,
+                           const std::string& reason) {
+    const int before = dSpaceGetNumGeoms(space.id);
+    try {
+      boxtree::ode::create_convex(space.id, pl.data(), plane_count, points, 8, po.data());
+      ADD_FAILURE() << "accepted; expected: " << reason;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(dSpaceGetNumGeoms(space.id), before);
+  };
+  std::vector<dReal> moved_plane = planes;
+  moved_plane[3] = 0.6;  // plane 0 off its polygon
+  refused(moved_plane, polygons, 6, "plane 0 is not the outward plane of polygon 0");
+  std::vector<dReal> inward = planes;
+  for (int k = 4; k < 8; ++k) inward[std::size_t(k)] = -inward[std::size_t(k)];  // plane 1 turned inward
+  refused(inward, polygons, 6, "plane 1");
+  std::vector<unsigned> bad_index = polygons;
+  bad_index[3] = 8;
+  refused(planes, bad_index, 6, "polygon 0: point index 8 out of range");
+  refused(planes, polygons, 5, "do not close");  // the last face left out
+  std::vector<unsigned> two_corners = polygons;
+  two_corners[0] = 2;
+  refused(planes, two_corners, 6, "polygon 0 has 2 corners");
+  // set_convex on a geom that is not a convex.
+  dGeomID sphere = dCreateSphere(space.id, 1);
+  EXPECT_THROW(boxtree::ode::set_convex(sphere, planes.data(), 6, points, 8, polygons.data()), Error);
 }
 
 // Mesh vs mesh: boxtree vs boxtree (same and different methods) and boxtree vs ODE's trimesh, in

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "boxtree/convex_polyhedron.h"
 #include "boxtree/detail/function_ref.h"
 #include "boxtree/shapes.h"
 
@@ -53,6 +54,7 @@ constexpr int kMaxSphereTriangleContacts = 1;
 constexpr int kMaxCapsuleTriangleContacts = 2;
 constexpr int kMaxBoxTriangleContacts = 8;
 constexpr int kMaxConvexTriangleContacts = 1;
+constexpr int kMaxPolyhedronTriangleContacts = 8;
 constexpr int kMaxCylinderTriangleContacts = 4;
 constexpr int kMaxTriangleTriangleContacts = 4;
 
@@ -74,6 +76,19 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
 // gap; a patch when the gap is along a face normal, else the closest pair.
 int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c,
                          const ContactOptions& options, ContactPoint* out);
+
+// A convex polyhedron with known faces (convex_polyhedron.h), in the triangle's frame: the same
+// separating axes as the box (its faces, the triangle's normal, edge x triangle edge: by parallel
+// class, or edge by edge through the edges' normal cones when there are many classes), so the
+// depth is the exact least penetration and a face case gives a patch, as contact_box_triangle
+// does (a face is kept only if its patch holds the depth; else the edge pair or the triangle's
+// face). For hulls this replaces GJK/EPA (contact_convex_triangle with support_points): exact
+// instead of ~1e-6 of the sizes, several points where a face rests on the triangle, no
+// iteration. Its cost grows with the corners: against GJK/EPA on the same points (random hulls,
+// triangles at their bottom, scratch measurement) 3.2x faster at 8 corners, 1.5x at 12, 1.3x at
+// 16, 1.6x slower at 32.
+int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
+                                const ContactOptions& options, ContactPoint* out);
 
 // A convex shape given by its support mapping: the point of the shape farthest along `direction`
 // (direction is not normalized). `center` is any interior point (used to start the search and to

@@ -99,7 +99,8 @@ int collide_convex_shape(dGeomID o1, dGeomID o2, int flags, dContactGeom* contac
   const ContactOptions options = options_of(object);
   const TriangleMesh& mesh = object.tree.mesh();
   std::vector<ContactPoint>& contacts = scratch_contacts();
-  ContactPoint found[kMaxBoxTriangleContacts];  // the largest per-facet count of contact.h
+  ContactPoint found[std::max({kMaxBoxTriangleContacts, kMaxPolyhedronTriangleContacts, kMaxCylinderTriangleContacts,
+                               kMaxCapsuleTriangleContacts})];  // the largest per-facet count of the shapes here
   std::uint64_t candidates = 0;
   object.tree.query_overlap(query, [&](FacetId facet) {
     ++candidates;
@@ -200,16 +201,16 @@ int collide_cylinder(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, i
       });
 }
 
-// ---- convex: the points registered with set_convex_points ----
+// ---- convex: what set_convex or set_convex_points registered ----
 int collide_convex(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
-  thread_local std::vector<Vec3> points;
-  if (!convex_points(o2, points)) return 0;
+  const std::shared_ptr<const ConvexEntry> entry = convex_entry(o2);
+  if (!entry) return 0;
   const GeomObject& object = *object_of(o1);
   const RigidTransform world_from_mesh = pose_of(o1);
   const RigidTransform world_from_convex = pose_of(o2);
   // Query volume: the points' box in the convex's own frame, as an oriented box in the mesh's.
   Aabb local = Aabb::empty();
-  for (const Vec3& p : points) local.expand(p);
+  for (const Vec3& p : entry->points) local.expand(p);
   const RigidTransform mesh_from_convex{
       world_from_mesh.rotation.transpose() * world_from_convex.rotation,
       world_from_mesh.rotation.transpose() * (world_from_convex.translation - world_from_mesh.translation)};
@@ -217,7 +218,20 @@ int collide_convex(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int
   query.center = mesh_from_convex.apply(local.center());
   query.axes = mesh_from_convex.rotation;
   query.half_extents = (local.extent() * Real(0.5)).array() + object.settings.margin;
-  for (Vec3& p : points) p = mesh_from_convex.apply(p);
+  if (entry->polyhedron) {
+    // Faces known: the exact separating-axis narrowphase, on the hull moved into the mesh's frame
+    // once per call.
+    thread_local ConvexPolyhedron hull;
+    transform_polyhedron(*entry->polyhedron, mesh_from_convex, hull);
+    return collide_convex_shape(
+        o1, o2, flags, contact, skip, query, local.extent().norm() / 2, world_from_mesh,
+        [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* found) {
+          return contact_polyhedron_triangle(hull, a, b, c, o, found);
+        });
+  }
+  thread_local std::vector<Vec3> points;
+  points.resize(entry->points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = mesh_from_convex.apply(entry->points[i]);
   Vec3 centroid = Vec3::Zero();
   for (const Vec3& p : points) centroid += p;
   centroid /= Real(points.size());

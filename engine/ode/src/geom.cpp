@@ -102,7 +102,7 @@ std::shared_ptr<const TriangleMesh> mesh_from_arrays(const Scalar* vertices, int
 
 // ---- convex registry ----
 std::mutex g_convex_mutex;
-std::unordered_map<dGeomID, std::vector<Vec3>> g_convex_points;
+std::unordered_map<dGeomID, std::shared_ptr<const ConvexEntry>> g_convex_entries;
 
 // ---- ODE trimesh trees ----
 using TrimeshKey = std::tuple<dTriMeshDataID, int /*kind*/, int /*hybrid level*/>;
@@ -149,12 +149,13 @@ RigidTransform pose_of(dGeomID geom) {
   return pose;
 }
 
-bool convex_points(dGeomID convex, std::vector<Vec3>& points_in_convex_frame) {
+std::shared_ptr<const ConvexEntry> convex_entry(dGeomID convex) {
+  std::shared_ptr<const ConvexEntry> entry;
   {
     std::lock_guard<std::mutex> lock(g_convex_mutex);
-    auto it = g_convex_points.find(convex);
-    if (it == g_convex_points.end()) return false;
-    points_in_convex_frame = it->second;
+    auto it = g_convex_entries.find(convex);
+    if (it == g_convex_entries.end()) return nullptr;
+    entry = it->second;
   }
   // ODE's AABB of a convex is exactly the box of its turned points (dxConvex::computeAABB), so
   // ours must agree with it; a mismatch means the entry belongs to another (destroyed) geom.
@@ -162,13 +163,13 @@ bool convex_points(dGeomID convex, std::vector<Vec3>& points_in_convex_frame) {
   dGeomGetAABB(convex, ode_box);
   const RigidTransform pose = pose_of(convex);
   Aabb box = Aabb::empty();
-  for (const Vec3& p : points_in_convex_frame) box.expand(pose.apply(p));
+  for (const Vec3& p : entry->points) box.expand(pose.apply(p));
   const Real tolerance = 1e-7 * (1 + box.max.cwiseAbs().maxCoeff() + box.min.cwiseAbs().maxCoeff());
   for (int i = 0; i < 3; ++i) {
     if (std::abs(box.min[i] - ode_box[2 * i]) > tolerance || std::abs(box.max[i] - ode_box[2 * i + 1]) > tolerance)
-      return false;
+      return nullptr;
   }
-  return true;
+  return entry;
 }
 
 std::shared_ptr<const TrimeshTree> trimesh_tree(dGeomID trimesh, const Method& method) {
@@ -306,26 +307,99 @@ void reset_geom_counters(dGeomID geom) {
   object.contacts = 0;
 }
 
-void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count) {
+namespace {
+
+void check_convex_geom(dGeomID convex, const char* caller) {
   if (!convex || dGeomGetClass(convex) != dConvexClass)
-    throw Error("boxtree::ode::set_convex_points: not a dConvex geom");
-  if (!points || point_count == 0) throw Error("boxtree::ode::set_convex_points: no points");
+    throw Error(std::string("boxtree::ode::") + caller + ": not a dConvex geom");
+}
+
+std::vector<Vec3> copy_points(const dReal* points, unsigned point_count, const char* caller) {
+  if (!points || point_count == 0) throw Error(std::string("boxtree::ode::") + caller + ": no points");
   std::vector<Vec3> copy;
   copy.reserve(point_count);
-  for (unsigned i = 0; i < point_count; ++i) copy.emplace_back(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+  for (unsigned i = 0; i < point_count; ++i) {
+    copy.emplace_back(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+    if (!copy.back().allFinite())
+      throw Error(std::string("boxtree::ode::") + caller + ": point " + std::to_string(i) + " is not finite");
+  }
+  return copy;
+}
+
+void register_convex(dGeomID convex, std::shared_ptr<const detail::ConvexEntry> entry) {
   std::lock_guard<std::mutex> lock(detail::g_convex_mutex);
-  detail::g_convex_points[convex] = std::move(copy);
+  detail::g_convex_entries[convex] = std::move(entry);
+}
+
+// The entry for dCreateConvex's arguments, checked (throws boxtree::Error).
+std::shared_ptr<const detail::ConvexEntry> convex_entry_of(const dReal* planes, unsigned plane_count,
+                                                           const dReal* points, unsigned point_count,
+                                                           const unsigned* polygons) {
+  auto entry = std::make_shared<detail::ConvexEntry>();
+  entry->points = copy_points(points, point_count, "set_convex");
+  if (!planes || !polygons || plane_count == 0) throw Error("boxtree::ode::set_convex: no planes or polygons");
+  // ODE's layout: per plane, the corner count and then the corner indices.
+  std::vector<std::vector<int>> faces(plane_count);
+  const unsigned* next = polygons;
+  for (unsigned f = 0; f < plane_count; ++f) {
+    const unsigned count = *next++;
+    if (count < 3 || count > unsigned(kMaxPolyhedronFaceCorners))
+      throw Error("boxtree::ode::set_convex: polygon " + std::to_string(f) + " has " + std::to_string(count) +
+                  " corners (3 to " + std::to_string(kMaxPolyhedronFaceCorners) + " are accepted)");
+    for (unsigned k = 0; k < count; ++k) {
+      const unsigned index = *next++;
+      if (index >= point_count)
+        throw Error("boxtree::ode::set_convex: polygon " + std::to_string(f) + ": point index " +
+                    std::to_string(index) + " out of range");
+      faces[f].push_back(int(index));
+    }
+  }
+  ConvexPolyhedron polyhedron;
+  try {
+    polyhedron = make_convex_polyhedron(entry->points, faces);
+  } catch (const Error& e) {
+    throw Error(std::string("boxtree::ode::set_convex: ") + e.what());
+  }
+  // ODE's own colliders read the planes: they must be the faces' (a x + b y + c z = d, outward).
+  for (unsigned f = 0; f < plane_count; ++f) {
+    const Vec3 n(planes[4 * f], planes[4 * f + 1], planes[4 * f + 2]);
+    const Real length = n.norm();
+    const Plane& face = polyhedron.faces[f];
+    if (!(length > 0) || !n.allFinite() || n.dot(face.normal) < (1 - 1e-6) * length ||
+        !(std::abs(planes[4 * f + 3] / length - face.offset) <= 1e-6 * polyhedron.size))
+      throw Error("boxtree::ode::set_convex: plane " + std::to_string(f) +
+                  " is not the outward plane of polygon " + std::to_string(f));
+  }
+  entry->polyhedron = std::make_unique<const ConvexPolyhedron>(std::move(polyhedron));
+  return entry;
+}
+
+}  // namespace
+
+void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count) {
+  check_convex_geom(convex, "set_convex_points");
+  auto entry = std::make_shared<detail::ConvexEntry>();
+  entry->points = copy_points(points, point_count, "set_convex_points");
+  register_convex(convex, std::move(entry));
+}
+
+void set_convex(dGeomID convex, const dReal* planes, unsigned plane_count, const dReal* points, unsigned point_count,
+                const unsigned* polygons) {
+  check_convex_geom(convex, "set_convex");
+  register_convex(convex, convex_entry_of(planes, plane_count, points, point_count, polygons));
 }
 
 void forget_convex(dGeomID convex) {
   std::lock_guard<std::mutex> lock(detail::g_convex_mutex);
-  detail::g_convex_points.erase(convex);
+  detail::g_convex_entries.erase(convex);
 }
 
 dGeomID create_convex(dSpaceID space, const dReal* planes, unsigned plane_count, const dReal* points,
                       unsigned point_count, const unsigned* polygons) {
+  // Checked before ODE sees it: nothing half-made is left in the caller's space on an Error.
+  auto entry = convex_entry_of(planes, plane_count, points, point_count, polygons);
   dGeomID convex = dCreateConvex(space, planes, plane_count, points, point_count, polygons);
-  set_convex_points(convex, points, point_count);
+  register_convex(convex, std::move(entry));
   return convex;
 }
 

@@ -4,6 +4,7 @@
 #include <memory>
 #include <vector>
 
+#include "boxtree/convex_polyhedron.h"
 #include "boxtree/ode/boxtree_geom.h"
 
 namespace boxtree::ode::detail {
@@ -25,9 +26,16 @@ GeomObject* object_of(dGeomID geom);  // nullptr if not a boxtree geom
 // A geom's placement: x_world = rotation * x_geom + translation.
 RigidTransform pose_of(dGeomID geom);
 
-// The copy of a convex's points registered by set_convex_points, checked against ODE's AABB of
-// the geom; false if there is none or it does not match.
-bool convex_points(dGeomID convex, std::vector<Vec3>& points_in_convex_frame);
+// What set_convex / set_convex_points registered for a convex geom, in the convex's own frame:
+// its points, and its faces when they were given (then the collider runs the separating-axis
+// narrowphase instead of GJK/EPA on the points).
+struct ConvexEntry {
+  std::vector<Vec3> points;
+  std::unique_ptr<const ConvexPolyhedron> polyhedron;  // null: points only
+};
+// The entry of a convex geom, checked against ODE's AABB of the geom; null if there is none or it
+// does not match (a destroyed geom's address reused).
+std::shared_ptr<const ConvexEntry> convex_entry(dGeomID convex);
 
 // An ODE trimesh's triangles as a boxtree in the trimesh's frame (facet ids = ODE's triangle
 // indices), with what the colliders need beside it. Built once per data and method, cached.

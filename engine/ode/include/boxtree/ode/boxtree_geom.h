@@ -90,14 +90,24 @@ CollisionCounters geom_counters(dGeomID geom);
 void reset_geom_counters(dGeomID geom);
 
 // ---- convex geoms ----
-// ODE has no getter for a dConvex's points, so the collider needs its own copy: register it once
-// per convex geom (the points in the convex's own frame, 3 dReals each, as given to
-// dCreateConvex). A convex without registered points collides with nothing (0 contacts).
-// Each call checks the copy against ODE's AABB of the geom, so a stale entry (a destroyed geom's
-// address reused) is ignored rather than used; still, call forget_convex before dGeomDestroy.
+// ODE has no getter for a dConvex's data, so the collider needs its own copy: register it once
+// per convex geom, in the convex's own frame. A convex without a registration collides with
+// nothing (0 contacts). Each call checks the copy against ODE's AABB of the geom, so a stale
+// entry (a destroyed geom's address reused) is ignored rather than used; still, call
+// forget_convex before dGeomDestroy.
+//  * set_convex: the arguments of dCreateConvex / dGeomSetConvex (planes a x + b y + c z = d with
+//    outward normals, points 3 dReals each, polygons as per plane a corner count and the corner
+//    indices). With the faces the collider uses the exact separating-axis narrowphase (a patch
+//    of up to 8 points per triangle where a face rests on it). Throws boxtree::Error unless the
+//    data is a closed convex polyhedron whose planes are its polygons' (make_convex_polyhedron,
+//    boxtree/convex_polyhedron.h), faces of at most 64 corners.
+//  * set_convex_points: the points only; the collider then runs GJK/EPA on their hull (one point
+//    per triangle).
+void set_convex(dGeomID convex, const dReal* planes, unsigned plane_count, const dReal* points, unsigned point_count,
+                const unsigned* polygons);
 void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count);
 void forget_convex(dGeomID convex);
-// dCreateConvex + set_convex_points in one call.
+// dCreateConvex + set_convex in one call (on an Error the new geom is destroyed before rethrowing).
 dGeomID create_convex(dSpaceID space, const dReal* planes, unsigned plane_count, const dReal* points,
                       unsigned point_count, const unsigned* polygons);
 
