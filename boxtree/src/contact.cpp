@@ -1502,6 +1502,141 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
 // ---------------------------------------------------------------------------------------------
 // Cylinder
 
+namespace {
+
+// The part of a solid cylinder (axis p0-p1, unit direction w, length L) inside the prism over a
+// non-degenerate triangle, by its depths below the triangle's plane (depth = n . v0 - n . x): the
+// deepest point and the least depth. A linear function over that convex set has its extremes
+// where its boundary constraints meet, so the candidates are: the cylinder's support along -+n
+// (no wall active); on one wall, the extremes of the side's section (an ellipse) and the rims'
+// crossings (the caps' sections are chords, whose extremes are their ends on the rims); on two
+// walls, the line through a corner along n, cut by the cylinder. Closed form throughout: the
+// push-out of a cylinder behind a one-sided triangle without GJK/EPA (the general routine took
+// ~9 us per such triangle on ODE's drop scene, a fifth of the cylinder's time there).
+struct PrismDepths {
+  bool any = false;
+  Real deepest = -kInf;
+  Vec3 deepest_point = Vec3::Zero();
+  Real shallowest = kInf;
+};
+
+PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length, Real radius, const TriangleFrame& tri,
+                                     Real slack) {
+  const Vec3& n = tri.normal;
+  const Real plane = n.dot(tri.v[0]);
+  Vec3 walls[3];
+  for (int i = 0; i < 3; ++i) walls[i] = inward_wall(tri, i).normalized();
+  const auto in_prism = [&](const Vec3& x, int skip1, int skip2) {
+    for (int i = 0; i < 3; ++i) {
+      if (i != skip1 && i != skip2 && walls[i].dot(x - tri.v[i]) < -slack) return false;
+    }
+    return true;
+  };
+  const auto axial_ok = [&](const Vec3& x) {
+    const Real along = w.dot(x - p0);
+    return along >= -slack && along <= length + slack;
+  };
+  PrismDepths result;
+  const auto take = [&](const Vec3& x) {
+    const Real depth = plane - n.dot(x);
+    result.any = true;
+    if (depth > result.deepest) {
+      result.deepest = depth;
+      result.deepest_point = x;
+    }
+    result.shallowest = std::min(result.shallowest, depth);
+  };
+  const Vec3 p1 = p0 + length * w;
+  const auto radial = [&](const Vec3& v) { return Vec3(v - w.dot(v) * w); };  // P v, P = I - w w^T
+  // No wall active.
+  for (const Real sign : {Real(-1), Real(1)}) {
+    const Vec3 x = support_cylinder(p0, p1, radius, sign * n);
+    if (in_prism(x, -1, -1)) take(x);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const Vec3& o = tri.v[i];
+    const Vec3 t = (tri.v[(i + 1) % 3] - o).normalized();  // the wall is o + a n + b t
+    // The side's section: |q + a pn + b pt|^2 = r^2, an ellipse in (a, b) unless the axis lies
+    // in the wall (then lines along the axis, whose extremes are on the rims, below).
+    const Vec3 q = radial(o - p0);
+    const Vec3 pn = radial(n);
+    const Vec3 pt = radial(t);
+    const Real m00 = pn.dot(pn), m01 = pn.dot(pt), m11 = pt.dot(pt);
+    const Real det = m00 * m11 - m01 * m01;
+    if (det > 1e-12) {
+      const Real g0 = q.dot(pn), g1 = q.dot(pt);
+      // Centre z0 = -M^-1 g; the ellipse is (z - z0)^T M (z - z0) = rho.
+      const Real a0 = -(m11 * g0 - m01 * g1) / det;
+      const Real b0 = -(-m01 * g0 + m00 * g1) / det;
+      const Real rho = radius * radius - (q.squaredNorm() + g0 * a0 + g1 * b0);
+      if (rho >= 0) {
+        // Extremes of a: z0 +- sqrt(rho) M^-1 e_a / sqrt((M^-1)_aa), (M^-1)_aa = m11 / det.
+        const Real scale = std::sqrt(rho / (m11 / det));
+        const Real da = scale * m11 / det;
+        const Real db = -scale * m01 / det;
+        for (const Real sign : {Real(-1), Real(1)}) {
+          const Vec3 x = o + (a0 + sign * da) * n + (b0 + sign * db) * t;
+          if (axial_ok(x) && in_prism(x, i, -1)) take(x);
+        }
+      }
+    }
+    // The rims across the wall: the circle c + r (cos f u1 + sin f u2) meets the wall where
+    // A cos f + B sin f = -D.
+    Vec3 u1;
+    Vec3 u2;
+    detail::orthonormal_completion(w, u1, u2);
+    for (const Vec3& centre : {p0, p1}) {
+      const Real A = radius * walls[i].dot(u1);
+      const Real B = radius * walls[i].dot(u2);
+      const Real D = walls[i].dot(centre - o);
+      const Real R = std::hypot(A, B);
+      if (!(R > 0) || std::abs(D) > R) continue;
+      const Real base = std::atan2(B, A);
+      const Real spread = std::acos(std::clamp(-D / R, Real(-1), Real(1)));
+      for (const Real f : {base + spread, base - spread}) {
+        const Vec3 x = centre + radius * (std::cos(f) * u1 + std::sin(f) * u2);
+        if (in_prism(x, i, -1)) take(x);
+      }
+    }
+  }
+  // The prism's edges: x = v_j - s n is in the cylinder for s in an interval; depth = s.
+  for (int j = 0; j < 3; ++j) {
+    const Vec3 q = radial(tri.v[j] - p0);
+    const Vec3 pn = radial(n);
+    Real lo = -kInf;
+    Real hi = kInf;
+    const Real alpha = pn.squaredNorm();
+    const Real beta = q.dot(pn);
+    const Real gamma = q.squaredNorm() - radius * radius;
+    if (alpha > 1e-12) {
+      const Real disc = beta * beta - alpha * gamma;
+      if (disc < 0) continue;
+      const Real root = std::sqrt(disc);
+      lo = (beta - root) / alpha;
+      hi = (beta + root) / alpha;
+    } else if (gamma > 0) {
+      continue;
+    }
+    // Axial: 0 <= w . (v_j - p0) - s (w . n) <= L.
+    const Real along = w.dot(tri.v[j] - p0);
+    const Real rate = w.dot(n);
+    if (std::abs(rate) > 1e-12) {
+      const Real s_a = along / rate;
+      const Real s_b = (along - length) / rate;
+      lo = std::max(lo, std::min(s_a, s_b));
+      hi = std::min(hi, std::max(s_a, s_b));
+    } else if (along < -slack || along > length + slack) {
+      continue;
+    }
+    if (!(lo <= hi) || !std::isfinite(lo) || !std::isfinite(hi)) continue;
+    take(tri.v[j] - hi * n);
+    take(tri.v[j] - lo * n);
+  }
+  return result;
+}
+
+}  // namespace
+
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
                               const ContactOptions& options, ContactPoint* out) {
   // The same answer as contact_convex_triangle (the least overlap of the projections over unit
@@ -1525,11 +1660,73 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   const Real size = std::max({tri.size, length, 2 * radius, std::max(options.margin, Real(0))});
   if (tri.degenerate || !(length > kTiny * size)) return general();
   const bool one_sided = tri.one_sided(options);
-  if (one_sided && tri.signed_distance(mid) < 0) return general();
   const Vec3 w = axis / length;
   const Real half = length / 2;
   const Real margin = std::max(options.margin, Real(0));
   const Real limit = -margin - tolerance(size, std::max({tri.coord, max_abs(p0), max_abs(p1)}));
+  Real pushed_depth = 0;
+  Vec3 pushed_point = Vec3::Zero();
+  if (one_sided && tri.signed_distance(mid) < 0) {
+    // Behind a one-sided triangle: pushed out through the front by the least lift that clears the
+    // triangle, the depth of the cylinder's deepest point over it; seen only if it really meets
+    // the triangle (points over it on both sides of the plane).
+    const PrismDepths depths =
+        cylinder_depths_in_prism(p0, w, length, radius, tri, tolerance(size, std::max(tri.coord, max_abs(mid))));
+    if (!depths.any || !(depths.deepest > 0) || depths.shallowest > 0) return 0;
+    pushed_depth = depths.deepest;
+    pushed_point = depths.deepest_point;
+  }
+
+  // Writes the first contact and, when the normal is the triangle's face, the patch.
+  const auto finish = [&](const Vec3& normal, Real depth, const ContactPoint& first) {
+    out[0] = first;
+    if (std::abs(normal.dot(tri.normal)) < 1 - 1e-9) return 1;
+
+    // The triangle's face is the normal: a patch, so that a cylinder lying on its side or standing on
+    // a disk rests on several points. Candidates: the two ends of the lowest line of the side (as
+    // the capsule's ends) and four points of the lower disk's rim, a quarter turn apart from its
+    // lowest one; those over the triangle, at their own depths along the normal.
+    const Real plane = normal.dot(tri.v[0]);
+    const Real along = normal.dot(w);
+    Vec3 down = -(normal - along * w);  // radial direction of the lowest line
+    const Real down_length = down.norm();
+    if (down_length > 1e-9) {
+      down /= down_length;
+    } else {
+      Vec3 unused;
+      detail::orthonormal_completion(w, down, unused);
+    }
+    const Vec3 side = w.cross(down);
+    const Vec3 low_end = along >= 0 ? p0 : p1;  // centre of the lower disk
+    const Vec3 high_end = along >= 0 ? p1 : p0;
+    Vec3 walls[3];
+    for (int i = 0; i < 3; ++i) walls[i] = inward_wall(tri, i);
+    const Real slack = tolerance(size, tri.coord) * size;
+    std::array<ContactPoint, 8> patch;
+    int count = 0;
+    patch[count++] = out[0];
+    const auto add = [&](const Vec3& x) {
+      for (int i = 0; i < 3; ++i) {
+        if (walls[i].dot(x - tri.v[i]) < -slack) return;
+      }
+      const Real d = plane - normal.dot(x);
+      if (d >= -margin && d <= depth) patch[count++] = make_contact(x + d * normal, normal, d);
+    };
+    add(low_end + radius * down);
+    add(high_end + radius * down);
+    if (radius > 0) {
+      add(low_end + radius * side);
+      add(low_end - radius * side);
+      add(low_end - radius * down);
+    }
+    count = reduce_in_place(patch.data(), count, kMaxCylinderTriangleContacts, 1e-7 * size);
+    std::copy(patch.begin(), patch.begin() + count, out);
+    return count;
+  };
+  if (pushed_depth > 0) {
+    return finish(tri.normal, pushed_depth,
+                  make_contact(pushed_point + pushed_depth * tri.normal, tri.normal, pushed_depth));
+  }
 
   // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u),
   // so the overlap is the corners' reach along u beyond mid plus the cylinder's half extent along u.
@@ -1670,53 +1867,11 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 150, ridges, 4, noise, true, limit);
   }
   if (!(best >= -margin)) return 0;
-  const Vec3 normal = best_normal;
-  const Real depth = best;
-  if (one_sided && normal.dot(tri.normal) < -kBehind) return general();
-  out[0] = make_contact(landing_position(tri, normal, support_cylinder(p0, p1, radius, -normal) + depth * normal, size),
-                        normal, depth);
-  if (std::abs(normal.dot(tri.normal)) < 1 - 1e-9) return 1;
-
-  // The triangle's face is the normal: a patch, so that a cylinder lying on its side or standing on
-  // a disk rests on several points. Candidates: the two ends of the lowest line of the side (as
-  // the capsule's ends) and four points of the lower disk's rim, a quarter turn apart from its
-  // lowest one; those over the triangle, at their own depths along the normal.
-  const Real plane = normal.dot(tri.v[0]);
-  const Real along = normal.dot(w);
-  Vec3 down = -(normal - along * w);  // radial direction of the lowest line
-  const Real down_length = down.norm();
-  if (down_length > 1e-9) {
-    down /= down_length;
-  } else {
-    Vec3 unused;
-    detail::orthonormal_completion(w, down, unused);
-  }
-  const Vec3 side = w.cross(down);
-  const Vec3 low_end = along >= 0 ? p0 : p1;  // centre of the lower disk
-  const Vec3 high_end = along >= 0 ? p1 : p0;
-  Vec3 walls[3];
-  for (int i = 0; i < 3; ++i) walls[i] = inward_wall(tri, i);
-  const Real slack = tolerance(size, tri.coord) * size;
-  std::array<ContactPoint, 8> patch;
-  int count = 0;
-  patch[count++] = out[0];
-  const auto add = [&](const Vec3& x) {
-    for (int i = 0; i < 3; ++i) {
-      if (walls[i].dot(x - tri.v[i]) < -slack) return;
-    }
-    const Real d = plane - normal.dot(x);
-    if (d >= -margin && d <= depth) patch[count++] = make_contact(x + d * normal, normal, d);
-  };
-  add(low_end + radius * down);
-  add(high_end + radius * down);
-  if (radius > 0) {
-    add(low_end + radius * side);
-    add(low_end - radius * side);
-    add(low_end - radius * down);
-  }
-  count = reduce_in_place(patch.data(), count, kMaxCylinderTriangleContacts, 1e-7 * size);
-  std::copy(patch.begin(), patch.begin() + count, out);
-  return count;
+  if (one_sided && best_normal.dot(tri.normal) < -kBehind) return general();
+  return finish(best_normal, best,
+                make_contact(landing_position(tri, best_normal,
+                                              support_cylinder(p0, p1, radius, -best_normal) + best * best_normal, size),
+                             best_normal, best));
 }
 
 // ---------------------------------------------------------------------------------------------
