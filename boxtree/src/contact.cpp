@@ -1810,14 +1810,30 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   const Real reach = one_sided ? 1 : 2;
   constexpr int kScan = 10;
   const auto scan_at = [&](int i) { return reach * Real(i * i) / Real(kScan * kScan); };
+  // A circle that cannot hold an overlap below the best so far is not scanned (one-sided: u
+  // between n and m). With x0 the cylinder's lowest point along n, d0 its depth below the plane
+  // and dj its distance inside edge j's line, the overlap along u = cos(f) n + sin(f) m is at
+  // least u . (v_j - x0) = d0 cos(f) + dj sin(f), which over f in [0, pi/2] is least at an end,
+  // min(d0, dj), unless both are negative (then -hypot(d0, dj) bounds it). Resting
+  // cylinders are shallow and mostly away from the edges: on ODE's drop scene this skips most
+  // circles of the flat contacts (the scans were 33 of their ~60 overlap evaluations).
+  const Vec3 lowest = support_cylinder(p0, p1, radius, -tri.normal);
+  const Real lowest_depth = tri.normal.dot(tri.v[0] - lowest);
   Vec3 circle_m[3];
   int circle_least[3];
   Real circle_value[3];
+  bool circle_skipped[3] = {false, false, false};
   for (int j = 0; j < 3; ++j) {
     const Vec3 m = (tri.v[(j + 1) % 3] - tri.v[j]).cross(tri.normal).normalized();
     circle_m[j] = m;
     circle_value[j] = kInf;
     circle_least[j] = 0;
+    const Real inside = m.dot(tri.v[j] - lowest);
+    const Real bound = lowest_depth < 0 && inside < 0 ? -std::hypot(lowest_depth, inside) : std::min(lowest_depth, inside);
+    if (one_sided && bound >= best - noise) {
+      circle_skipped[j] = true;
+      continue;
+    }
     for (int i = 0; i <= kScan; ++i) {
       const Real value = overlap_along(on_circle(m, scan_at(i)));
       if (value < circle_value[j]) {
@@ -1828,7 +1844,7 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   }
   bool refined = false;
   for (int j = 0; j < 3 && !(best < limit); ++j) {
-    if (flat && !(circle_value[j] < best - noise)) continue;
+    if (circle_skipped[j] || (flat && !(circle_value[j] < best - noise))) continue;
     refined = true;
     const Vec3& m = circle_m[j];
     const auto consider_at = [&](Real x) {
