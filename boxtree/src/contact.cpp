@@ -432,6 +432,16 @@ struct Interval {
   Real hi = -kInf;
 };
 
+Interval project_points(const Vec3* points, int count, const Vec3& u) {
+  Interval r;
+  for (int i = 0; i < count; ++i) {
+    const Real x = u.dot(points[i]);
+    r.lo = std::min(r.lo, x);
+    r.hi = std::max(r.hi, x);
+  }
+  return r;
+}
+
 Interval project(const Polytope& p, const Vec3& u) {
   if (p.is_box) {
     // Centre and radius: three dot products instead of eight.
@@ -439,13 +449,7 @@ Interval project(const Polytope& p, const Vec3& u) {
     const Real radius = p.half_extents.dot((p.axes.transpose() * u).cwiseAbs());
     return {c - radius, c + radius};
   }
-  Interval r;
-  for (int i = 0; i < p.vertex_count; ++i) {
-    const Real x = u.dot(p.vertices[i]);
-    r.lo = std::min(r.lo, x);
-    r.hi = std::max(r.hi, x);
-  }
-  return r;
+  return project_points(p.vertices, p.vertex_count, u);
 }
 
 Interval project(const TriangleFrame& tri, const Vec3& u) {
@@ -540,15 +544,7 @@ struct PolyhedronShape {
   bool edges_by_cone;
 };
 
-Interval project(const PolyhedronShape& p, const Vec3& u) {
-  Interval r;
-  for (int i = 0; i < p.vertex_count; ++i) {
-    const Real x = u.dot(p.vertices[i]);
-    r.lo = std::min(r.lo, x);
-    r.hi = std::max(r.hi, x);
-  }
-  return r;
-}
+Interval project(const PolyhedronShape& p, const Vec3& u) { return project_points(p.vertices, p.vertex_count, u); }
 
 enum class AxisKind { kTriangleFace, kShapeFace, kEdges };
 
