@@ -131,17 +131,13 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const s
     p.edge_from.push_back(from);
     p.edge_to.push_back(to);
     p.edge_direction.push_back(direction);
-    p.edge_faces.push_back(face);
-    p.edge_faces.push_back(reverse->second);
-  }
-  for (std::size_t e = 0; e < p.edge_from.size(); ++e) {
-    const Vec3& a1 = p.faces[std::size_t(p.edge_faces[2 * e])].normal;
-    const Vec3& a2 = p.faces[std::size_t(p.edge_faces[2 * e + 1])].normal;
+    const Vec3& a1 = p.faces[std::size_t(face)].normal;
+    const Vec3& a2 = p.faces[std::size_t(reverse->second)].normal;
     const Vec3 arc = a1.cross(a2);
-    const Vec3 d = p.vertices[std::size_t(p.edge_to[e])] - p.vertices[std::size_t(p.edge_from[e])];
-    p.edge_cone.push_back((a1 + a2).cross(d));
-    p.edge_cone.push_back(arc.cross(a1).cross(d));
-    p.edge_cone.push_back(a2.cross(arc).cross(d));
+    const Vec3 along = p.vertices[std::size_t(to)] - p.vertices[std::size_t(from)];
+    p.edge_cone.push_back((a1 + a2).cross(along));
+    p.edge_cone.push_back(arc.cross(a1).cross(along));
+    p.edge_cone.push_back(a2.cross(arc).cross(along));
   }
   Aabb corners = Aabb::empty();
   for (const Vec3& v : p.vertices) {
@@ -174,7 +170,6 @@ void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& tran
   out.edge_from = in.edge_from;
   out.edge_to = in.edge_to;
   out.edge_direction = in.edge_direction;
-  out.edge_faces = in.edge_faces;
   out.edge_cone.resize(in.edge_cone.size());
   for (std::size_t k = 0; k < in.edge_cone.size(); ++k) out.edge_cone[k] = r * in.edge_cone[k];
   out.directions.resize(in.directions.size());

@@ -23,16 +23,14 @@ struct ConvexPolyhedron {
   std::vector<int> face_begin;
   std::vector<int> loops;
   std::vector<Plane> sides;
-  // Every edge once (corner indices), the class of parallel edges it belongs to, and the two
-  // faces it joins (edge_faces[2e], edge_faces[2e + 1]): their normals bound the edge's normal
-  // cone, which tells which edge pairs can be in contact at all.
+  // Every edge once (corner indices) and the class of parallel edges it belongs to.
   std::vector<int> edge_from;
   std::vector<int> edge_to;
   std::vector<int> edge_direction;
-  std::vector<int> edge_faces;
-  // Per edge e (direction d = to - from, face normals a1, a2, arc = a1 x a2), three vectors that
-  // turn the normal-cone test of d x t against any triangle edge t into dot products with t:
-  // (a1 + a2) x d, (arc x a1) x d and (a2 x arc) x d.
+  // The edge's normal cone (the normals a1, a2 of the two faces it joins bound it), which tells
+  // which edge pairs can be in contact at all: per edge e (direction d = to - from,
+  // arc = a1 x a2) three vectors that turn the cone test of d x t against any triangle edge t
+  // into dot products with t: (a1 + a2) x d, (arc x a1) x d and (a2 x arc) x d.
   std::vector<Vec3> edge_cone;
   std::vector<Vec3> directions;  // unit, one per class of parallel edges
   Vec3 center = Vec3::Zero();    // mean of the corners: an interior point
