@@ -499,7 +499,8 @@ struct PolyhedronShape {
         // Per triangle, the parallel classes cost 2 x 3 x classes projections of all corners,
         // the cones 3 x edges tests of 3 dot products (and their branches) plus a projection
         // per pair that passes. Measured on the drop scene's stretched icosahedra (15 classes,
-        // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call.
+        // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call; on random hulls
+        // without parallel edges (12 to 32 corners) the cones are 1.9-2.5x faster per triangle.
         edges_by_cone(direction_count * (vertex_count + 3) > 8 * edge_count) {}
 
   // The closest point of the surface (for a point outside: of the polyhedron), over the faces
