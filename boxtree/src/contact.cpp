@@ -882,11 +882,9 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
 
   // One-sided: a shape behind the plane, or whose natural normal points behind it, is pushed out
   // through the front face by its directional penetration, if it overlaps at all.
-  bool pushed_out = false;
   if (one_sided && (center_side < 0 || chosen.normal.dot(tri.normal) < -kBehind)) {
     if (apart) return 0;
     chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
-    pushed_out = true;
   } else if (apart) {
     const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
     const Real distance = std::sqrt(pair.distance_squared);
@@ -913,11 +911,6 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   if (count == 0 && chosen.kind == AxisKind::kEdges && face_choice.overlap < kInf) {
     chosen = face_choice;
     count = generate(chosen);
-  } else if (count == 0 && chosen.kind == AxisKind::kShapeFace && !pushed_out && best_edge.overlap < kInf) {
-    // The face was preferred over a slightly smaller edge overlap, but the triangle is not over
-    // it (a general polyhedron's face can be narrow): the edge pair is the contact.
-    chosen = best_edge;
-    count = generate(chosen);
   }
   if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
     // A box is the prism over each of its faces, so a face's patch always holds the triangle's
@@ -925,7 +918,8 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     // inside it beyond the face's polygon, under a neighbouring face, and the patch then falls
     // short of the axis' overlap (moving by its depth would not separate). Then the edge pair
     // carries the contact if it is exact, else the triangle's face (its patch is the directional
-    // depth along the triangle's normal, over the whole triangle).
+    // depth along the triangle's normal, over the whole triangle). An empty patch (the triangle
+    // is not over the face at all) is the extreme case.
     const auto reaches = [&](const Axis& axis, int n) {
       Real deepest = -kInf;
       for (int i = 0; i < n; ++i) deepest = std::max(deepest, scratch[i].depth);
@@ -1545,6 +1539,10 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
   };
   const Vec3 p1 = p0 + length * w;
   const auto radial = [&](const Vec3& v) { return Vec3(v - w.dot(v) * w); };  // P v, P = I - w w^T
+  const Vec3 pn = radial(n);
+  Vec3 u1;  // the rims' plane
+  Vec3 u2;
+  detail::orthonormal_completion(w, u1, u2);
   // No wall active.
   for (const Real sign : {Real(-1), Real(1)}) {
     const Vec3 x = support_cylinder(p0, p1, radius, sign * n);
@@ -1556,7 +1554,6 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
     // The side's section: |q + a pn + b pt|^2 = r^2, an ellipse in (a, b) unless the axis lies
     // in the wall (then lines along the axis, whose extremes are on the rims, below).
     const Vec3 q = radial(o - p0);
-    const Vec3 pn = radial(n);
     const Vec3 pt = radial(t);
     const Real m00 = pn.dot(pn), m01 = pn.dot(pt), m11 = pt.dot(pt);
     const Real det = m00 * m11 - m01 * m01;
@@ -1579,9 +1576,6 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
     }
     // The rims across the wall: the circle c + r (cos f u1 + sin f u2) meets the wall where
     // A cos f + B sin f = -D.
-    Vec3 u1;
-    Vec3 u2;
-    detail::orthonormal_completion(w, u1, u2);
     for (const Vec3& centre : {p0, p1}) {
       const Real A = radius * walls[i].dot(u1);
       const Real B = radius * walls[i].dot(u2);
@@ -1599,7 +1593,6 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
   // The prism's edges: x = v_j - s n is in the cylinder for s in an interval; depth = s.
   for (int j = 0; j < 3; ++j) {
     const Vec3 q = radial(tri.v[j] - p0);
-    const Vec3 pn = radial(n);
     Real lo = -kInf;
     Real hi = kInf;
     const Real alpha = pn.squaredNorm();
