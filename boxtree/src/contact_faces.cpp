@@ -50,7 +50,7 @@ int clip_to_prism(const Vec3* t, const Vec3* f, const Vec3& n, Real margin, Vec3
 }  // namespace
 
 int contact_triangle_faces(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                           const Vec3& b2, const ContactOptions& options, ContactPoint* out) {
+                           const Vec3& b2, const ContactOptions& options, ContactPoint* out, FixedSurface fixed) {
   const Vec3 a[3] = {a0, a1, a2}, b[3] = {b0, b1, b2};
   Vec3 na = (a1 - a0).cross(a2 - a0), nb = (b1 - b0).cross(b2 - b0);
   const Real la = na.norm(), lb = nb.norm();
@@ -85,6 +85,8 @@ int contact_triangle_faces(const Vec3& a0, const Vec3& a1, const Vec3& a2, const
   bool use_b;
   if (count_a == 0 || count_b == 0) {
     use_b = count_b > 0;
+  } else if (fixed != FixedSurface::neither && na.dot(nb) > 0) {
+    use_b = fixed == FixedSurface::b;
   } else if (lb >= 2 * la || la >= 2 * lb) {
     use_b = lb > la;
   } else {

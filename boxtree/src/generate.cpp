@@ -48,6 +48,28 @@ TriangleMesh make_bumpy_sphere(int segments, int rings, Real roughness, std::uin
   return mesh;
 }
 
+TriangleMesh make_torus(Real major, Real minor, int segments, int sides) {
+  if (segments < 3 || sides < 3) throw Error("make_torus: need segments >= 3 and sides >= 3");
+  if (!(minor > 0) || !(minor < major)) throw Error("make_torus: need 0 < minor < major");
+  const Real pi = std::acos(Real(-1));
+  TriangleMesh mesh;
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      const Real u = 2 * pi * i / segments, v = 2 * pi * j / sides;
+      const Real r = major + minor * std::cos(v);
+      mesh.vertices.emplace_back(r * std::cos(u), r * std::sin(u), minor * std::sin(v));
+    }
+  auto id = [&](int i, int j) { return VertexId((i % segments) * sides + j % sides); };
+  // (i, j) -> (i + 1, j) -> (i + 1, j + 1) turns along u then v, and du x dv points away from
+  // the tube's core circle: outward.
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return mesh;
+}
+
 namespace {
 // Value noise on an integer lattice, smoothly interpolated.
 Real lattice_value(std::uint64_t seed, std::int64_t x, std::int64_t y) {

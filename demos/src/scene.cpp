@@ -125,25 +125,6 @@ TriangleMesh make_cylinder_mesh(Real radius, Real half_length, int segments) {
   return lathe({{0, half_length}, {radius, half_length}, {radius, -half_length}, {0, -half_length}}, segments);
 }
 
-TriangleMesh make_torus_mesh(Real major, Real minor, int segments, int sides) {
-  TriangleMesh mesh;
-  for (int i = 0; i < segments; ++i)
-    for (int j = 0; j < sides; ++j) {
-      const Real u = 2 * kPi * i / segments, v = 2 * kPi * j / sides;
-      const Real r = major + minor * std::cos(v);
-      mesh.vertices.emplace_back(r * std::cos(u), r * std::sin(u), minor * std::sin(v));
-    }
-  auto id = [&](int i, int j) { return VertexId((i % segments) * sides + j % sides); };
-  for (int i = 0; i < segments; ++i)
-    for (int j = 0; j < sides; ++j) {
-      mesh.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      mesh.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  if (signed_volume(mesh) < 0)
-    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
-  return mesh;
-}
-
 TriangleMesh make_icosahedron(Real radius) {
   const Real phi = (1 + std::sqrt(Real(5))) / 2;
   TriangleMesh mesh;
@@ -299,7 +280,7 @@ Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
           mesh = boxtree::make_bumpy_sphere(14, 9, 0.2, random.next());
           for (Vec3& v : mesh.vertices) v *= size;
         } else {
-          mesh = make_torus_mesh(0.7 * size, 0.3 * size, 18, 8);
+          mesh = boxtree::make_torus(0.7 * size, 0.3 * size, 18, 8);
         }
         b.colour = {0.9, 0.45, 0.7};
         break;

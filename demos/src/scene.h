@@ -86,7 +86,6 @@ TriangleMesh render_mesh_of(const BodySpec& body);
 TriangleMesh make_box_mesh(const Vec3& half_extents);
 TriangleMesh make_capsule_mesh(Real radius, Real half_length, int segments, int rings);
 TriangleMesh make_cylinder_mesh(Real radius, Real half_length, int segments);
-TriangleMesh make_torus_mesh(Real major, Real minor, int segments, int sides);
 TriangleMesh make_icosahedron(Real radius);
 
 }  // namespace demo

@@ -140,9 +140,16 @@ int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
 // from above). Unlike contact_triangle_triangle's edge-edge axes, face normals do not swing
 // between steps, which keeps resting meshes still. Up to kMaxTriangleFaceContacts points with
 // depth >= -margin; positions on triangle b; normals from b towards a.
+// `fixed`: which triangle, if either, belongs to a fixed surface (a static terrain). Where the
+// faces point the same way (n_a . n_b > 0) the triangles cross in an overlap deeper than the
+// surfaces' local shape can tell: the faces of a body sunk past the middle of its tube point up
+// from under the ground, and their normals would pull it further down. There the fixed
+// surface's face gives the normal (when it has points), so that bodies come back out of it.
+enum class FixedSurface { neither, a, b };
 constexpr int kMaxTriangleFaceContacts = 6;
 int contact_triangle_faces(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                           const Vec3& b2, const ContactOptions& options, ContactPoint* out);
+                           const Vec3& b2, const ContactOptions& options, ContactPoint* out,
+                           FixedSurface fixed = FixedSurface::neither);
 
 // Reduces a contact set the way a stable trimesh collider does: merges near-duplicates (positions
 // closer than `merge_distance` with normals within ~10 degrees: keeps the deeper one), then, if

@@ -16,6 +16,10 @@ TriangleMesh make_uv_sphere(int segments, int rings, Real radius = 1, const Vec3
 // random factor in [1 - roughness, 1 + roughness].
 TriangleMesh make_bumpy_sphere(int segments, int rings, Real roughness, std::uint64_t seed);
 
+// Closed torus around the z axis, wound outward: `segments` around the axis times `sides`
+// around the tube, 2 facets per quad. segments, sides >= 3; 0 < minor < major.
+TriangleMesh make_torus(Real major, Real minor, int segments, int sides);
+
 // Fractal terrain (sum of octaves of value noise) over [0, size]^2 in x, y with heights in
 // about [0, height]; cells_x * cells_y grid cells, 2 facets each.
 TriangleMesh make_terrain(int cells_x, int cells_y, std::uint64_t seed, Real size = 100, Real height = 10);

@@ -343,6 +343,12 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
     contacts.clear();
     ContactOptions options;
     options.margin = Real(m_manifold->getContactBreakingThreshold());
+    // A static or kinematic mesh (a terrain) is the surface that deep overlaps are resolved
+    // through (contact.h): a torus pressed under the pile was pulled through the terrain by its own
+    // upward faces.
+    const FixedSurface fixed = w0->getCollisionObject()->isStaticOrKinematicObject()   ? FixedSurface::a
+                               : w1->getCollisionObject()->isStaticOrKinematicObject() ? FixedSurface::b
+                                                                                      : FixedSurface::neither;
     const TriangleMesh& ma = a.mesh();
     const TriangleMesh& mb = b.mesh();
     ContactPoint out[kMaxTriangleFaceContacts];
@@ -351,7 +357,7 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
       const Vec3 b0 = a_from_b.apply(mb.corner(pair.b, 0)), b1 = a_from_b.apply(mb.corner(pair.b, 1)),
                  b2 = a_from_b.apply(mb.corner(pair.b, 2));
       const int n = contact_triangle_faces(ma.corner(pair.a, 0), ma.corner(pair.a, 1), ma.corner(pair.a, 2), b0, b1, b2,
-                                           options, out);
+                                           options, out, fixed);
       for (int i = 0; i < n; ++i) {
         out[i].facet = pair.b;
         out[i].other_facet = pair.a;
