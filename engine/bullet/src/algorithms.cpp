@@ -365,7 +365,13 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
       }
       return true;
     });
-    if (contacts.empty()) return;
+    if (contacts.empty()) {
+      // Last step's points are still in the manifold: refreshed (moved with the bodies, dropped
+      // once apart beyond the breaking threshold) as Bullet's own algorithms do, not left to the
+      // solver at the depths they had.
+      if (m_manifold->getNumContacts()) result->refreshContactPoints();
+      return;
+    }
     reduce_contacts(contacts, kMaxContactsPerPair, Real(m_manifold->getContactBreakingThreshold()));
     for (const ContactPoint& c : contacts) {
       int part_a = 0, index_a = 0, part_b = 0, index_b = 0;
