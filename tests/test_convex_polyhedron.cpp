@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -214,6 +215,7 @@ TEST(ConvexPolyhedron, TransformMovesPlanesWithThePoints) {
     const RigidTransform t = rng.motion(5);
     transform_polyhedron(cube, t, moved);
     ASSERT_EQ(moved.vertices.size(), cube.vertices.size());
+    ASSERT_EQ(moved.face_width.size(), moved.faces.size());
     EXPECT_TRUE(moved.center.isApprox(t.apply(cube.center), 1e-12));
     EXPECT_NEAR(moved.size, cube.size, 1e-12);
     for (int f = 0; f < moved.face_count(); ++f) {
@@ -222,6 +224,14 @@ TEST(ConvexPolyhedron, TransformMovesPlanesWithThePoints) {
         EXPECT_NEAR(moved.faces[std::size_t(f)].normal.dot(corner), moved.faces[std::size_t(f)].offset, 1e-12);
         EXPECT_LE(moved.sides[std::size_t(k)].signed_distance_scaled(moved.center), 0);
       }
+      // The face's plane supports the corners, and its width is their extent along its normal.
+      Real lo = std::numeric_limits<Real>::infinity(), hi = -lo;
+      for (const Vec3& v : moved.vertices) {
+        lo = std::min(lo, moved.faces[std::size_t(f)].normal.dot(v));
+        hi = std::max(hi, moved.faces[std::size_t(f)].normal.dot(v));
+      }
+      EXPECT_NEAR(hi, moved.faces[std::size_t(f)].offset, 1e-12);
+      EXPECT_NEAR(hi - lo, moved.face_width[std::size_t(f)], 1e-12);
     }
     for (std::size_t e = 0; e < moved.edge_from.size(); ++e) {
       const Vec3 d = moved.vertices[std::size_t(moved.edge_to[e])] - moved.vertices[std::size_t(moved.edge_from[e])];

@@ -487,6 +487,7 @@ struct PolyhedronShape {
         edge_to(p.edge_to.data()),
         edge_direction(p.edge_direction.data()),
         edge_cone(p.edge_cone.data()),
+        face_width(p.face_width.data()),
         direction_count(int(p.directions.size())),
         directions(p.directions.data()),
         face_count(p.face_count()),
@@ -533,6 +534,7 @@ struct PolyhedronShape {
   const int* edge_to;
   const int* edge_direction;
   const Vec3* edge_cone;
+  const Real* face_width;
   int direction_count;
   const Vec3* directions;
   int face_count;
@@ -786,6 +788,18 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     return std::pair<Real, Real>{t.hi - p.lo, p.hi - t.lo};
   };
 
+  // Along the shape's own face f (n = -outward): a polyhedron's projection is known from the
+  // face's plane and width, three dot products instead of one per corner per face.
+  const auto overlaps_both_ways_on_face = [&](int f, const Vec3& n) {
+    if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
+      const Interval t = project(tri, n);
+      const Real lo = -shape.faces[f].offset;
+      const Real hi = lo + shape.face_width[f];
+      return std::pair<Real, Real>{t.hi - lo, hi - t.lo};
+    } else {
+      return overlaps_both_ways(n);
+    }
+  };
   Axis best_face;
   Axis best_tri_face;
   Axis best_edge;
@@ -805,7 +819,7 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   if (separation > margin) return 0;
   for (int f = 0; f < shape.face_count; ++f) {
     const Vec3 n = -shape.faces[f].outward;
-    const auto [ov, reverse] = overlaps_both_ways(n);
+    const auto [ov, reverse] = overlaps_both_ways_on_face(f, n);
     separation = std::max(separation, -std::min(ov, reverse));
     if (separation > margin) return 0;
     consider(best_face, {n, ov, AxisKind::kShapeFace, f, 0});
@@ -838,7 +852,9 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
           // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
           if (!(len > 1e-6 * edges[j].norm() * d.norm())) continue;
           const Vec3 n = -u / len;
-          const Real overlap = overlap_along(n);
+          // The cone test put -n (the shape's outward normal here) in edge k's cone: the edge is
+          // the shape's support along -n, and its corner gives the shape's projection.
+          const Real overlap = project(tri, n).hi - n.dot(shape.vertices[shape.edge_from[k]]);
           separation = std::max(separation, -overlap);
           if (separation > margin) return 0;
           consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});

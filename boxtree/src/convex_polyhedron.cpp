@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -139,6 +140,18 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const s
     p.edge_cone.push_back(arc.cross(a1).cross(along));
     p.edge_cone.push_back(a2.cross(arc).cross(along));
   }
+  // Each face's plane through its outermost corner (the mean of its loop is within the
+  // planarity tolerance of it) and the polyhedron's width along its normal.
+  p.face_width.resize(p.faces.size());
+  for (std::size_t f = 0; f < p.faces.size(); ++f) {
+    Real lo = std::numeric_limits<Real>::infinity(), hi = -lo;
+    for (const Vec3& v : p.vertices) {
+      lo = std::min(lo, p.faces[f].normal.dot(v));
+      hi = std::max(hi, p.faces[f].normal.dot(v));
+    }
+    p.faces[f].offset = hi;
+    p.face_width[f] = hi - lo;
+  }
   Aabb corners = Aabb::empty();
   for (const Vec3& v : p.vertices) {
     p.center += v;
@@ -165,6 +178,7 @@ void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& tran
   };
   move(in.faces, out.faces);
   move(in.sides, out.sides);
+  out.face_width = in.face_width;  // widths do not change under a rigid motion
   out.face_begin = in.face_begin;
   out.loops = in.loops;
   out.edge_from = in.edge_from;

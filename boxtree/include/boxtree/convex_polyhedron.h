@@ -15,8 +15,13 @@ namespace boxtree {
 
 struct ConvexPolyhedron {
   std::vector<Vec3> vertices;  // the corners that lie on some face
-  // Face f: unit outward normal and offset (normal . x == offset on the face, <= inside).
+  // Face f: unit outward normal and offset (normal . x == offset on the face, <= inside; the
+  // offset is the largest normal . x over the corners: a supporting plane).
   std::vector<Plane> faces;
+  // Face f: the polyhedron's extent along the face's normal (offset minus the least normal . x
+  // over the corners). With it a face's own axis costs the triangle's three dot products instead
+  // of a projection of every corner.
+  std::vector<Real> face_width;
   // Face f's corners are loops[face_begin[f] .. face_begin[f + 1]), counter-clockwise seen from
   // outside; sides[k] is the outward half-space of the edge loops[k] -> next corner, within the
   // face's plane (a point of the plane is on the face iff it is inside all of its face's sides).
