@@ -896,24 +896,6 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   }
   if (chosen.overlap == kInf) return 0;  // no axis at all: only for shapes without faces or edges
 
-  // One-sided: a shape behind the plane, or whose natural normal points behind it, is pushed out
-  // through the front face by its directional penetration, if it overlaps at all.
-  if (one_sided && (center_side < 0 || chosen.normal.dot(tri.normal) < -kBehind)) {
-    if (apart) return 0;
-    chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
-  } else if (apart) {
-    const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
-    const Real distance = std::sqrt(pair.distance_squared);
-    if (!(distance <= margin)) return 0;
-    if (-chosen.overlap < distance - slack) {
-      // The chosen axis' gap is short of the distance: its features are not the closest ones.
-      const Vec3 normal = (pair.on_shape - pair.on_triangle) / distance;
-      if (one_sided && normal.dot(tri.normal) < -kBehind) return 0;
-      out[0] = make_contact(pair.on_triangle, normal, -distance);
-      return 1;
-    }
-  }
-
   std::array<ContactPoint, kScratchContacts> scratch;
   const auto generate = [&](const Axis& axis) {
     switch (axis.kind) {
@@ -923,7 +905,41 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     }
     return 0;
   };
-  int count = generate(chosen);
+  // Whether the axis' features hold its overlap: a contact at that depth.
+  const auto reaches = [&](const Axis& axis, int n) {
+    Real deepest = -kInf;
+    for (int i = 0; i < n; ++i) deepest = std::max(deepest, scratch[i].depth);
+    return deepest >= axis.overlap - (1e-9 * size + slack);
+  };
+
+  // One-sided: a shape behind the plane, or whose natural normal points behind it, is pushed out
+  // through the front face by its directional penetration, if it overlaps at all.
+  int count = -1;  // the chosen axis' contacts in scratch, once generated
+  if (one_sided && (center_side < 0 || chosen.normal.dot(tri.normal) < -kBehind)) {
+    if (apart) return 0;
+    chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
+  } else if (apart) {
+    // The gap along a separating axis is a lower bound of the distance; when the axis' features
+    // hold it (a corner over the other's face at that height, crossing edges), two points are
+    // that far apart and it is the distance. Only otherwise is the closest pair searched (dear
+    // for a polyhedron: its faces' fans against the triangle's corners, its corners and edges).
+    count = generate(chosen);
+    if (!reaches(chosen, count)) {
+      count = -1;
+      const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
+      const Real distance = std::sqrt(pair.distance_squared);
+      if (!(distance <= margin)) return 0;
+      if (-chosen.overlap < distance - slack) {
+        // The chosen axis' gap is short of the distance: its features are not the closest ones.
+        const Vec3 normal = (pair.on_shape - pair.on_triangle) / distance;
+        if (one_sided && normal.dot(tri.normal) < -kBehind) return 0;
+        out[0] = make_contact(pair.on_triangle, normal, -distance);
+        return 1;
+      }
+    }
+  }
+
+  if (count < 0) count = generate(chosen);
   if (count == 0 && chosen.kind == AxisKind::kEdges && face_choice.overlap < kInf) {
     chosen = face_choice;
     count = generate(chosen);
@@ -936,11 +952,6 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     // carries the contact if it is exact, else the triangle's face (its patch is the directional
     // depth along the triangle's normal, over the whole triangle). An empty patch (the triangle
     // is not over the face at all) is the extreme case.
-    const auto reaches = [&](const Axis& axis, int n) {
-      Real deepest = -kInf;
-      for (int i = 0; i < n; ++i) deepest = std::max(deepest, scratch[i].depth);
-      return deepest >= axis.overlap - (1e-9 * size + slack);
-    };
     if (chosen.kind == AxisKind::kShapeFace && !reaches(chosen, count)) {
       int edge_count = best_edge.overlap < kInf ? generate(best_edge) : 0;
       if (edge_count > 0) {
