@@ -3,6 +3,8 @@
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/CollisionShapes/btConvexPolyhedron.h>
+#include <BulletCollision/CollisionShapes/btPolyhedralConvexShape.h>
 #include <BulletCollision/CollisionShapes/btTriangleShape.h>
 
 #include <LinearMath/btPoolAllocator.h>
@@ -15,6 +17,8 @@
 #include "boxtree/active_edges.h"
 #include "boxtree/bullet/mesh_shape.h"
 #include "boxtree/contact.h"
+#include "boxtree/convex_polyhedron.h"
+#include "boxtree/error.h"
 #include "convert.h"
 
 namespace boxtree::bullet {
@@ -27,6 +31,23 @@ constexpr std::size_t kMaxContactsPerPair = 4;
 
 const BoxtreeMeshShape& mesh_shape(const btCollisionObjectWrapper* wrap) {
   return *static_cast<const BoxtreeMeshShape*>(wrap->getCollisionShape());
+}
+
+// The hull Bullet computed for a polyhedral shape (initializePolyhedralFeatures: its corners and
+// its faces, coplanar triangles merged into polygons), as the core's ConvexPolyhedron; empty if the
+// core refuses it (a merged face not planar to 1e-6 of the size, say), and the shape keeps GJK.
+std::unique_ptr<const ConvexPolyhedron> convert_polyhedron(const btConvexPolyhedron& source) {
+  std::vector<Vec3> points;
+  points.reserve(std::size_t(source.m_vertices.size()));
+  for (int i = 0; i < source.m_vertices.size(); ++i) points.push_back(to_vec(source.m_vertices[i]));
+  std::vector<std::vector<int>> faces(std::size_t(source.m_faces.size()));
+  for (int f = 0; f < source.m_faces.size(); ++f)
+    for (int k = 0; k < source.m_faces[f].m_indices.size(); ++k) faces[std::size_t(f)].push_back(source.m_faces[f].m_indices[k]);
+  try {
+    return std::make_unique<const ConvexPolyhedron>(make_convex_polyhedron(points, faces));
+  } catch (const Error&) {
+    return nullptr;
+  }
 }
 
 // Bullet's contact convention, which the code below relies on: btManifoldResult::addContactPoint
@@ -128,10 +149,14 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     const bool mesh_is_result_b = result->getBody1Internal() == mesh_wrap->getCollisionObject();
 
     const int type = convex->getShapeType();
+    // Hulls (and other polyhedral shapes but boxes) whose faces Bullet has computed.
+    const ConvexPolyhedron* hull = m_settings->analyticContacts && type != BOX_SHAPE_PROXYTYPE && convex->isPolyhedral()
+                                       ? polyhedronOf(*convex)
+                                       : nullptr;
     const bool analytic = m_settings->analyticContacts && mesh.hasUnitScaling() &&
-                          (type == SPHERE_SHAPE_PROXYTYPE || type == BOX_SHAPE_PROXYTYPE || type == CAPSULE_SHAPE_PROXYTYPE);
+                          (type == SPHERE_SHAPE_PROXYTYPE || type == BOX_SHAPE_PROXYTYPE || type == CAPSULE_SHAPE_PROXYTYPE || hull);
     if (analytic) {
-      processAnalytic(mesh, *convex, convex_in_mesh, mesh_to_world, reach, mesh_margin, mesh_is_result_b, *result);
+      processAnalytic(mesh, *convex, hull, convex_in_mesh, mesh_to_world, reach, mesh_margin, mesh_is_result_b, *result);
     } else {
       processGjk(mesh, *convex, convex_wrap, mesh_wrap, convex_in_mesh, reach, info, *result);
     }
@@ -156,9 +181,14 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   };
 
  private:
-  // Spheres, boxes and capsules: the body's own volume (grown by the contact reach) queries the
-  // tree down to the facets, and the core's analytic routines give the contacts.
-  void processAnalytic(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const btTransform& convex_in_mesh,
+  // Spheres, boxes, capsules and hulls with faces: the body's own volume (grown by the contact
+  // reach; a hull's oriented box) queries the tree down to the facets, and the core's analytic
+  // routines give the contacts. A hull has faces once Bullet has computed its polyhedral features
+  // (btPolyhedralConvexShape::initializePolyhedralFeatures, which Bullet's own hull-hull clipping
+  // needs too); against GJK/EPA per triangle the depth is exact and a face resting on facets gives
+  // a patch in one step. Same collision time on the drop scene's hulls (12 corners).
+  void processAnalytic(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const ConvexPolyhedron* polyhedron,
+                       const btTransform& convex_in_mesh,
                        const btTransform& mesh_to_world, Real reach, Real mesh_margin, bool mesh_is_result_b,
                        btManifoldResult& result) {
     thread_local std::vector<ContactPoint> contacts;
@@ -170,7 +200,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     const Mat3 basis = to_mat(convex_in_mesh.getBasis());
     const TriangleMesh& m = mesh.mesh();
     const std::vector<std::uint8_t>& active = mesh.activeEdges();
-    ContactPoint out[kMaxBoxTriangleContacts];
+    ContactPoint out[std::max(kMaxBoxTriangleContacts, kMaxPolyhedronTriangleContacts)];
     auto run = [&](const auto& query, auto&& contact_fn) {
       mesh.tree().query_overlap(query, [&](FacetId f) {
         mesh.countNarrowphaseTriangles(1);
@@ -201,7 +231,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
         });
         break;
       }
-      default: {  // CAPSULE_SHAPE_PROXYTYPE
+      case CAPSULE_SHAPE_PROXYTYPE: {
         const auto& capsule_shape = static_cast<const btCapsuleShape&>(convex);
         const Vec3 axis = basis.col(capsule_shape.getUpAxis()) * Real(capsule_shape.getHalfHeight());
         const Capsule capsule{center - axis, center + axis, Real(capsule_shape.getRadius())};
@@ -209,6 +239,26 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
             [&](const Vec3& a, const Vec3& b, const Vec3& c, ContactPoint* o) {
               return contact_capsule_triangle(capsule, a, b, c, options, o);
             });
+        break;
+      }
+      default: {
+        // A hull with faces: the exact separating axes of the core polyhedron (a patch where a
+        // face rests on a facet), the shape's margin added to the depth as Bullet's rounded hull
+        // has it (its extent along any axis is the core's plus the margin).
+        const Real hull_margin = Real(convex.getMargin());
+        thread_local ConvexPolyhedron hull;
+        transform_polyhedron(*polyhedron, RigidTransform{basis, center}, hull);
+        ContactOptions hull_options = options;
+        hull_options.margin = reach + hull_margin;
+        btVector3 lo, hi;
+        convex.getAabb(btTransform::getIdentity(), lo, hi);  // margin included, in the body's frame
+        Obb box{to_vec(convex_in_mesh((lo + hi) * btScalar(0.5))), basis, to_vec((hi - lo) * btScalar(0.5))};
+        box.half_extents.array() += reach;
+        run(box, [&](const Vec3& a, const Vec3& b, const Vec3& c, ContactPoint* o) {
+          const int n = contact_polyhedron_triangle(hull, a, b, c, hull_options, o);
+          for (int i = 0; i < n; ++i) o[i].depth += hull_margin;
+          return n;
+        });
         break;
       }
     }
@@ -222,10 +272,10 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     }
   }
 
-  // Other convex shapes: the body's box in the mesh frame, as an oriented box (tighter than the
-  // axis-aligned box Bullet's own algorithm queries with), picks the triangles; Bullet's own
-  // convex-triangle algorithm (GJK/EPA) gives the contacts, exactly as in
-  // btConvexConcaveCollisionAlgorithm.
+  // Other convex shapes (cylinders, cones, hulls without faces): the body's box in the mesh frame,
+  // as an oriented box (tighter than the axis-aligned box Bullet's own algorithm queries with),
+  // picks the triangles; Bullet's own convex-triangle algorithm (GJK/EPA) gives the contacts,
+  // exactly as in btConvexConcaveCollisionAlgorithm.
   void processGjk(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const btCollisionObjectWrapper* convex_wrap,
                   const btCollisionObjectWrapper* mesh_wrap, const btTransform& convex_in_mesh, Real reach,
                   const btDispatcherInfo& info, btManifoldResult& result) {
@@ -307,9 +357,22 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     }
   }
 
+  // The body's hull with faces, converted once per pair from Bullet's polyhedral features (null
+  // if it has none, or the core refused them: then GJK as for any convex).
+  const ConvexPolyhedron* polyhedronOf(const btConvexShape& convex) {
+    const btConvexPolyhedron* source = static_cast<const btPolyhedralConvexShape&>(convex).getConvexPolyhedron();
+    if (source != m_polyhedronSource) {
+      m_polyhedronSource = source;
+      m_polyhedron = source ? convert_polyhedron(*source) : nullptr;
+    }
+    return m_polyhedron.get();
+  }
+
   btPersistentManifold* m_manifold = nullptr;
   bool m_swapped;
   const AlgorithmSettings* m_settings;
+  const btConvexPolyhedron* m_polyhedronSource = nullptr;
+  std::unique_ptr<const ConvexPolyhedron> m_polyhedron;
 };
 
 // ---------------------------------------------------------------------------------------------
