@@ -920,9 +920,12 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     chosen = {tri.normal, overlap_along(tri.normal), AxisKind::kTriangleFace, 0, 0};
   } else if (apart) {
     // The gap along a separating axis is a lower bound of the distance; when the axis' features
-    // hold it (a corner over the other's face at that height, crossing edges), two points are
-    // that far apart and it is the distance. Only otherwise is the closest pair searched (dear
-    // for a polyhedron: its faces' fans against the triangle's corners, its corners and edges).
+    // hold it (a corner over the other's face at that height and its foot on the face, or the
+    // crossing points of two edges), two points are that far apart and it is the distance. Only
+    // otherwise is the closest pair searched (dear for a polyhedron: its faces' fans against the
+    // triangle's corners, its corners and edges). The search also rounds: at 10 m from the
+    // origin its distance came out ~1e-8 longer than the gap, far above `slack`, and a face
+    // hovering over a facet then got one closest point instead of its patch.
     count = generate(chosen);
     if (!reaches(chosen, count)) {
       count = -1;
