@@ -136,9 +136,6 @@ class BulletSimulation final : public Simulation {
           auto* hull = new btConvexHullShape();
           for (const Vec3& v : spec.mesh->vertices) hull->addPoint(bt(v), false);
           hull->recalcLocalAabb();
-          // Faces, in both worlds: Bullet's hull-hull and hull-box pairs then use its polyhedral
-          // clipping, boxtree's hull-terrain pairs the exact separating axes with a patch.
-          hull->initializePolyhedralFeatures();
           shape = own(hull);
           break;
         }

@@ -35,7 +35,8 @@ std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
       std::uniform_real_distribution<float> p(-0.6f, 0.6f);
       for (int i = 0; i < 12; ++i) hull->addPoint(btVector3(p(rng), p(rng), p(rng)), false);
       hull->recalcLocalAabb();
-      // Faces: boxtree's analytic path takes the exact separating axes, Bullet its clipping.
+      // Faces: Bullet's hull-hull pairs use its clipping; boxtree keeps GJK for hulls unless
+      // AlgorithmSettings::hullFaces (the test below).
       hull->initializePolyhedralFeatures();
       return hull;
     }
@@ -151,6 +152,7 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
     for (int mode = 0; mode < 2; ++mode) {
       AlgorithmSettings settings;
       settings.analyticContacts = mode == 0;
+      settings.hullFaces = mode == 0;
       World world(true, settings);
       auto ground = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(terrain), "aabb");
       const BoxtreeMeshShape* ground_shape = ground.get();

@@ -150,7 +150,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
 
     const int type = convex->getShapeType();
     // Hulls (and other polyhedral shapes but boxes) whose faces Bullet has computed.
-    const ConvexPolyhedron* hull = m_settings->analyticContacts && type != BOX_SHAPE_PROXYTYPE && convex->isPolyhedral()
+    const ConvexPolyhedron* hull = m_settings->analyticContacts && m_settings->hullFaces && type != BOX_SHAPE_PROXYTYPE &&
+                                           convex->isPolyhedral()
                                        ? polyhedronOf(*convex)
                                        : nullptr;
     const bool analytic = m_settings->analyticContacts && mesh.hasUnitScaling() &&
@@ -183,10 +184,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
  private:
   // Spheres, boxes, capsules and hulls with faces: the body's own volume (grown by the contact
   // reach; a hull's oriented box) queries the tree down to the facets, and the core's analytic
-  // routines give the contacts. A hull has faces once Bullet has computed its polyhedral features
-  // (btPolyhedralConvexShape::initializePolyhedralFeatures, which Bullet's own hull-hull clipping
-  // needs too); against GJK/EPA per triangle the depth is exact and a face resting on facets gives
-  // a patch in one step. Same collision time on the drop scene's hulls (12 corners).
+  // routines give the contacts. Hulls take this path with AlgorithmSettings::hullFaces, once
+  // Bullet has computed their polyhedral features (algorithms.h says what it gains and costs).
   void processAnalytic(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const ConvexPolyhedron* polyhedron,
                        const btTransform& convex_in_mesh,
                        const btTransform& mesh_to_world, Real reach, Real mesh_margin, bool mesh_is_result_b,

@@ -17,6 +17,13 @@ struct AlgorithmSettings {
   // Convex vs mesh: the analytic routines for spheres, boxes and capsules (else Bullet's GJK for
   // every candidate triangle, with the boxtree's tight-volume query still in front).
   bool analyticContacts = true;
+  // Hulls whose faces Bullet has computed (btPolyhedralConvexShape::initializePolyhedralFeatures)
+  // get boxtree's exact separating axes too (with analyticContacts): the least penetration of the
+  // hull with its margin, and a patch of points in one step where a face rests on facets, instead
+  // of one GJK/EPA point per triangle (a few mm shallower when deep). Off by default: on the drop
+  // scene (500 bodies, a sixth of them 12-corner hulls) it cost 12% more collision time than
+  // Bullet's GJK (alternating runs: 18.6-19.2 vs 21.0-22.7 ms per step).
+  bool hullFaces = false;
   // Register the convex-vs-boxtree algorithm at all (false: Bullet's btConvexConcaveCollisionAlgorithm,
   // fed by processAllTriangles with the body's box).
   bool convexAlgorithm = true;
