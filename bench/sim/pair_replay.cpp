@@ -32,6 +32,12 @@ int main(int argc, char** argv) {
   app.add_option("--only", only_name, "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
   app.add_option("--midphase", midphase, "builtin, boxtree or both")->capture_default_str();
   app.add_option("--method", method, "boxtree hierarchy method")->capture_default_str();
+  int max_contacts = 8;
+  app.add_option("--max-contacts", max_contacts,
+                 "Contact buffer per dCollide call, both worlds (OPCODE's capsule and cylinder colliders stop "
+                 "visiting triangles when it is full)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   CLI11_PARSE(app, argc, argv);
   try {
     demo::Shape only_shape{};
@@ -49,7 +55,9 @@ int main(int argc, char** argv) {
     demo::TerrainOptions terrain;
     terrain.cells = cells;
     const demo::Scene scene = demo::make_scene(terrain, bodies, seed);
-    demo::SimOptions boxtree_options;
+    demo::SimOptions builtin_options;
+    builtin_options.max_contacts_per_pair = max_contacts;
+    demo::SimOptions boxtree_options = builtin_options;
     boxtree_options.boxtree_midphase = true;
     boxtree_options.method = method;
     std::vector<demo::Pose> poses;
@@ -67,7 +75,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<demo::Simulation> worlds[2];
     for (const bool use_boxtree : {false, true}) {
       if (midphase != "both" && use_boxtree != (midphase == "boxtree")) continue;
-      worlds[use_boxtree] = demo::make_ode_simulation(scene, use_boxtree ? boxtree_options : demo::SimOptions{});
+      worlds[use_boxtree] = demo::make_ode_simulation(scene, use_boxtree ? boxtree_options : builtin_options);
       if (!worlds[use_boxtree]->set_poses(poses)) throw boxtree::Error("the simulation cannot be posed");
     }
     for (int round = 0; round < rounds; ++round) {
@@ -79,8 +87,10 @@ int main(int argc, char** argv) {
         }
       }
     }
-    std::printf("ODE drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds\n", cells,
-                bodies, settle, repeats, rounds);
+    std::printf(
+        "ODE drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds, "
+        "%d contacts per call at most\n",
+        cells, bodies, settle, repeats, rounds, max_contacts);
     std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs", "OPCODE us", "contacts",
                 "triangles", "boxtree us", "contacts", "triangles", "ratio");
     double total[2] = {0, 0};

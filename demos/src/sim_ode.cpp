@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
 #include <unordered_map>
 
 #include "boxtree/error.h"
@@ -22,7 +23,7 @@ bool have_ode_adapter() { return BOXTREE_DEMO_HAVE_ODE_ADAPTER + 0 != 0; }
 
 namespace {
 
-constexpr int kMaxContactsPerPair = 8;
+constexpr int kContactBuffer = 64;  // the largest SimOptions::max_contacts_per_pair
 
 // Arrays ODE keeps pointers into (trimesh data, convex planes and polygons).
 struct OdeMeshData {
@@ -41,7 +42,10 @@ struct OdeConvexData {
 
 class OdeSimulation final : public Simulation {
  public:
-  OdeSimulation(const Scene& scene, const SimOptions& options) : boxtree_(options.boxtree_midphase) {
+  OdeSimulation(const Scene& scene, const SimOptions& options)
+      : boxtree_(options.boxtree_midphase), max_contacts_(options.max_contacts_per_pair) {
+    if (max_contacts_ < 1 || max_contacts_ > kContactBuffer)
+      throw boxtree::Error("max_contacts_per_pair must be 1 to " + std::to_string(kContactBuffer));
 #if !BOXTREE_DEMO_HAVE_ODE_ADAPTER
     if (boxtree_) throw boxtree::Error("the ODE adapter (boxtree::ode) was not built; use --midphase builtin");
 #endif
@@ -259,7 +263,7 @@ class OdeSimulation final : public Simulation {
   void collide_pair(dGeomID a, dGeomID b) {
     dBodyID body_a = dGeomGetBody(a), body_b = dGeomGetBody(b);
     if (!body_a && !body_b) return;
-    dContact contact[kMaxContactsPerPair];
+    dContact contact[kContactBuffer];
     const int n = timed_collide(a, b, contact);
     for (int i = 0; i < n; ++i) {
       contact[i].surface.mode = dContactApprox1 | dContactRolling;
@@ -275,11 +279,11 @@ class OdeSimulation final : public Simulation {
 
   // dCollide(a, b), its time, contacts and triangles added to pair_time_.
   int timed_collide(dGeomID a, dGeomID b, dContact* contact = nullptr) {
-    dContact scratch[kMaxContactsPerPair];
+    dContact scratch[kContactBuffer];
     if (!contact) contact = scratch;
     const std::uint64_t triangles_before = pair_triangles(a, b);
     const auto start = std::chrono::steady_clock::now();
-    const int n = dCollide(a, b, kMaxContactsPerPair, &contact[0].geom, sizeof(dContact));
+    const int n = dCollide(a, b, max_contacts_, &contact[0].geom, sizeof(dContact));
     PairKindTime& time = pair_time_[pair_kind(a, b)];
     time.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++time.calls;
@@ -313,6 +317,7 @@ class OdeSimulation final : public Simulation {
   }
 
   bool boxtree_;
+  int max_contacts_;
   std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
   PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;
