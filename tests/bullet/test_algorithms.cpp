@@ -174,11 +174,12 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
     ++compared;
     more_points += points[0] > points[1];
     // The separating axes are exact (core hull + margin, test_convex_polyhedron's brute force);
-    // EPA on floats comes from inside, shallower by up to ~4 mm here. Where the terrain's internal
-    // edges turn a contact to the face normal the two paths' contacts differ in normal and so in
-    // corrected depth (up to ~11 mm here, always deeper on the face path). A wrong frame or a
-    // margin counted twice or not at all would be off by the 4 cm margin or more.
-    EXPECT_LE(deepest[0], deepest[1] + 5e-4) << "trial " << trial;
+    // EPA on floats mostly comes from inside, shallower by up to ~4 mm here (once, in the -O2
+    // sanitizer build, 0.6 mm deeper). Where the terrain's internal edges turn a contact to the
+    // face normal the two paths' contacts differ in normal and so in corrected depth (up to ~11 mm
+    // here, deeper on the face path). A wrong frame or a margin counted twice or not at all would
+    // be off by the 4 cm margin or more.
+    EXPECT_LE(deepest[0], deepest[1] + 2e-3) << "trial " << trial;
     EXPECT_GE(deepest[0], deepest[1] - 1.5e-2) << "trial " << trial << ": separating axes " << points[0]
                                                << " points, GJK " << points[1];
   }
