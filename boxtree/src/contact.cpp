@@ -432,7 +432,11 @@ struct Interval {
   Real hi = -kInf;
 };
 
-Interval project_points(const Vec3* points, int count, const Vec3& u) {
+// The projections are called once or twice per separating axis. GCC kept the two below as calls
+// (7.6% of a box-vs-terrain call's samples in their bodies); forced inline, with the corner loop
+// for general polytopes out of line, ODE's box calls take 3-5% less time (pair_replay --only box,
+// 6.38-6.67 -> 6.15-6.30 us per call in alternating runs).
+[[gnu::noinline]] Interval project_points(const Vec3* points, int count, const Vec3& u) {
   Interval r;
   for (int i = 0; i < count; ++i) {
     const Real x = u.dot(points[i]);
@@ -442,7 +446,7 @@ Interval project_points(const Vec3* points, int count, const Vec3& u) {
   return r;
 }
 
-Interval project(const Polytope& p, const Vec3& u) {
+[[gnu::always_inline]] inline Interval project(const Polytope& p, const Vec3& u) {
   if (p.is_box) {
     // Centre and radius: three dot products instead of eight.
     const Real c = u.dot(p.center);
@@ -452,7 +456,7 @@ Interval project(const Polytope& p, const Vec3& u) {
   return project_points(p.vertices, p.vertex_count, u);
 }
 
-Interval project(const TriangleFrame& tri, const Vec3& u) {
+[[gnu::always_inline]] inline Interval project(const TriangleFrame& tri, const Vec3& u) {
   const Real x0 = u.dot(tri.v[0]);
   const Real x1 = u.dot(tri.v[1]);
   const Real x2 = u.dot(tri.v[2]);
