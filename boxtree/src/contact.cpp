@@ -900,7 +900,9 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   }
   if (chosen.overlap == kInf) return 0;  // no axis at all: only for shapes without faces or edges
 
-  std::array<ContactPoint, kScratchContacts> scratch;
+  // Per thread, not per call: constructing 48 contacts (3 KB of default members) was 14% of a
+  // box-vs-triangle call's samples.
+  thread_local std::array<ContactPoint, kScratchContacts> scratch;
   const auto generate = [&](const Axis& axis) {
     switch (axis.kind) {
       case AxisKind::kTriangleFace: return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
