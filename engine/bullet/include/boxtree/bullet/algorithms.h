@@ -21,8 +21,9 @@ struct AlgorithmSettings {
   // get boxtree's exact separating axes too (with analyticContacts): the least penetration of the
   // hull with its margin, and a patch of points in one step where a face rests on facets, instead
   // of one GJK/EPA point per triangle (a few mm shallower when deep). Off by default: on the drop
-  // scene (500 bodies, a sixth of them 12-corner hulls) it cost 12% more collision time than
-  // Bullet's GJK (alternating runs: 18.6-19.2 vs 21.0-22.7 ms per step).
+  // scene (500 bodies, a sixth of them 12-corner hulls) it costs 5-6% more collision time than
+  // Bullet's GJK (alternating runs: 17.6-18.2 vs 18.5-19.3 ms per step; 12% before the
+  // separating axes' scratch stopped being initialised per call).
   bool hullFaces = false;
   // Register the convex-vs-boxtree algorithm at all (false: Bullet's btConvexConcaveCollisionAlgorithm,
   // fed by processAllTriangles with the body's box).
