@@ -1,5 +1,7 @@
 #include "boxtree/packed_tree.h"
 
+#include <cassert>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -71,41 +73,61 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
   // pair up into full nodes at the bottom, so there are about n / 3 packed nodes whatever the
   // parity of the levels (collapsing every two levels from the top leaves half the bottom nodes
   // with two children).
-  struct Slots {
-    NodeIndex child[kWidth];
-    int count = 0;
-  };
-  std::vector<Slots> slots(tree.node_count());
+  // One byte per source node: bits 0 and 1, whether child 0 / 1 is taken in; bits 2-4, the
+  // slot count. The child lists are expanded from these bits when the node is laid out (kept
+  // whole, 20 bytes per node, they were 40 MB of temporary memory at 1M facets).
+  std::vector<std::uint8_t> plan(tree.node_count(), 0);
+  const auto slot_count = [&](NodeIndex c) { return tree.is_leaf(c) ? 1 : int(plan[c] >> 2); };
+  std::size_t packed_count = 1;  // the root, and every inner child not taken into its parent
   // Children come after their parent in Tree's layout: a reverse sweep sees children first.
   for (NodeIndex v = NodeIndex(tree.node_count()); v-- > 0;) {
     if (tree.is_leaf(v)) continue;
     const NodeIndex c0 = tree.first_child(v), c1 = c0 + 1;
-    const auto size = [&](NodeIndex c) { return tree.is_leaf(c) ? 1 : slots[c].count; };
     bool take[2] = {false, false};
-    if (!tree.is_leaf(c0) && !tree.is_leaf(c1) && size(c0) + size(c1) <= kWidth) {
+    if (!tree.is_leaf(c0) && !tree.is_leaf(c1) && slot_count(c0) + slot_count(c1) <= kWidth) {
       take[0] = take[1] = true;
     } else {
       // Take in one child's slots: the one with the larger box, if it fits.
       const bool larger_first = surface_area(tree.volume(c0)) >= surface_area(tree.volume(c1));
       for (int k : {larger_first ? 0 : 1, larger_first ? 1 : 0}) {
         const NodeIndex c = c0 + NodeIndex(k);
-        if (!tree.is_leaf(c) && size(c) + 1 <= kWidth) {
+        if (!tree.is_leaf(c) && slot_count(c) + 1 <= kWidth) {
           take[k] = true;
           break;
         }
       }
     }
-    Slots& s = slots[v];
+    int count = 0;
     for (int k = 0; k < 2; ++k) {
       const NodeIndex c = c0 + NodeIndex(k);
       if (take[k]) {
-        for (int i = 0; i < slots[c].count; ++i) s.child[s.count++] = slots[c].child[i];
+        count += slot_count(c);
       } else {
-        s.child[s.count++] = c;
+        ++count;
+        packed_count += !tree.is_leaf(c);
       }
     }
+    plan[v] = std::uint8_t(int(take[0]) | int(take[1]) << 1 | count << 2);
   }
-  nodes_.reserve(tree.facet_count() / 2);
+  // The slots of inner node v, in order: each child, or the slots of a child taken in.
+  const auto expand = [&](NodeIndex v, NodeIndex* out) {
+    int count = 0;
+    const auto visit = [&](const auto& self, NodeIndex node) -> void {
+      const NodeIndex c0 = tree.first_child(node);
+      for (int k = 0; k < 2; ++k) {
+        const NodeIndex c = c0 + NodeIndex(k);
+        if (plan[node] >> k & 1) {
+          self(self, c);
+        } else {
+          out[count++] = c;
+        }
+      }
+    };
+    visit(visit, v);
+    return count;
+  };
+  // Exactly: a guess and shrink_to_fit copied the whole array (1M facets: 22 MB).
+  nodes_.reserve(packed_count);
   // Depth first, preorder: a node's first inner child is the next node (what the walks read
   // next). Each pending entry is a source node to pack, where its packed index must be written,
   // and its depth in the packed tree.
@@ -121,8 +143,8 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
     pending.pop_back();
     const auto index = std::uint32_t(nodes_.size());
     if (p.slot >= 0) nodes_[p.parent].link[p.slot] = index;
-    const NodeIndex* children = slots[p.source].child;
-    const int count = slots[p.source].count;
+    NodeIndex children[kWidth];
+    const int count = expand(p.source, children);
     Node& node = nodes_.emplace_back();
     for (int slot = 0; slot < kWidth; ++slot) {
       if (slot >= count) {  // an empty box (min > max) and no link
@@ -142,7 +164,7 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
     for (int slot = count - 1; slot >= 0; --slot)
       if (!tree.is_leaf(children[slot])) pending.push_back({children[slot], index, slot, p.depth + 1});
   }
-  nodes_.shrink_to_fit();
+  assert(nodes_.size() == packed_count);
 }
 
 namespace {
