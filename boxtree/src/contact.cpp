@@ -934,7 +934,6 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     // hovering over a facet then got one closest point instead of its patch.
     count = generate(chosen);
     if (!reaches(chosen, count)) {
-      count = -1;
       const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
       const Real distance = std::sqrt(pair.distance_squared);
       if (!(distance <= margin)) return 0;

@@ -244,6 +244,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
         // A hull with faces: the exact separating axes of the core polyhedron (a patch where a
         // face rests on a facet), the shape's margin added to the depth as Bullet's rounded hull
         // has it (its extent along any axis is the core's plus the margin).
+        if (!polyhedron) break;  // (processCollision sends no other shape here)
         const Real hull_margin = Real(convex.getMargin());
         thread_local ConvexPolyhedron hull;
         transform_polyhedron(*polyhedron, RigidTransform{basis, center}, hull);
@@ -359,7 +360,10 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   // The body's hull with faces, converted once per pair from Bullet's polyhedral features (null
   // if it has none, or the core refused them: then GJK as for any convex).
   const ConvexPolyhedron* polyhedronOf(const btConvexShape& convex) {
-    const btConvexPolyhedron* source = static_cast<const btPolyhedralConvexShape&>(convex).getConvexPolyhedron();
+    // isPolyhedral() also holds for CUSTOM_POLYHEDRAL_SHAPE_TYPE, a user's class that need not
+    // derive from btPolyhedralConvexShape.
+    const auto* shape = dynamic_cast<const btPolyhedralConvexShape*>(&convex);
+    const btConvexPolyhedron* source = shape ? shape->getConvexPolyhedron() : nullptr;
     if (source != m_polyhedronSource) {
       m_polyhedronSource = source;
       m_polyhedron = source ? convert_polyhedron(*source) : nullptr;
