@@ -1,8 +1,7 @@
 #include "boxtree/packed_tree.h"
 
-#include <cassert>
-
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 

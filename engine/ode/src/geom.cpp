@@ -360,13 +360,18 @@ std::shared_ptr<const detail::ConvexEntry> convex_entry_of(const dReal* planes, 
   } catch (const Error& e) {
     throw Error(std::string("boxtree::ode::set_convex: ") + e.what());
   }
-  // ODE's own colliders read the planes: they must be the faces' (a x + b y + c z = d, outward).
+  // ODE's own colliders read the planes: they must be the faces' (a x + b y + c z = d, outward):
+  // the polygon's normal, and its corners on the plane to the builder's planarity tolerance (not
+  // compared with the built face's offset, which is one choice within that tolerance).
   for (unsigned f = 0; f < plane_count; ++f) {
     const Vec3 n(planes[4 * f], planes[4 * f + 1], planes[4 * f + 2]);
     const Real length = n.norm();
     const Plane& face = polyhedron.faces[f];
-    if (!(length > 0) || !n.allFinite() || n.dot(face.normal) < (1 - 1e-6) * length ||
-        !(std::abs(planes[4 * f + 3] / length - face.offset) <= 1e-6 * polyhedron.size))
+    bool on_plane = std::isfinite(planes[4 * f + 3]);
+    for (const int corner : faces[f])
+      on_plane = on_plane && std::abs(n.dot(entry->points[std::size_t(corner)]) - planes[4 * f + 3]) <=
+                                 1e-6 * polyhedron.size * length;
+    if (!(length > 0) || !n.allFinite() || n.dot(face.normal) < (1 - 1e-6) * length || !on_plane)
       throw Error("boxtree::ode::set_convex: plane " + std::to_string(f) +
                   " is not the outward plane of polygon " + std::to_string(f));
   }
