@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "boxtree/volume/obb.h"
@@ -394,6 +395,19 @@ unsigned leaf_slots(const PackedAabbTree::Node& node) {
   return mask;
 }
 
+// The next float above f (+inf and NaN stay). std::nextafter is a call into libm, not inlined:
+// 2% of a ray's time when every hit rescaled the ray's end with it.
+inline float next_float_up(float f) {
+  if (!(f < std::numeric_limits<float>::infinity())) return f;
+  if (f == 0) return std::numeric_limits<float>::denorm_min();
+  std::uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  bits = f > 0 ? bits + 1 : bits - 1;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+inline float next_float_down(float f) { return -next_float_up(-f); }
+
 // The ray in grid coordinates, restarted at its first point in the mesh's bounds (t = base) and
 // scaled so that its largest direction component is 1 (parameter s = (t - base) / scale): there
 // grid coordinates are at most ~65,536, so single precision places the ray to ~0.01 of a grid
@@ -421,8 +435,8 @@ struct GridRay {
     }
   }
   // s of a ray parameter t, rounded outward (down for the start of a range, up for its end).
-  float s_down(Real t) const { return std::nextafter(float((t - base) / scale), -HUGE_VALF); }
-  float s_up(Real t) const { return std::nextafter(float((t - base) / scale), HUGE_VALF); }
+  float s_down(Real t) const { return next_float_down(float((t - base) / scale)); }
+  float s_up(Real t) const { return next_float_up(float((t - base) / scale)); }
   Real t_of(float s) const { return base + Real(s) * scale; }
 
   // Bit c set: the ray meets child c's box for s in [s_lo, s_hi]; s_enter[c] is where it enters.
@@ -471,38 +485,38 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
   Real t_enter = 0;
   ++stats.volume_tests;
   if (!intersect_ray(tree.bounds(), RayPrecomputed(ray), ray.t_min, t_max, &t_enter)) return;
+  ++stats.nodes_visited;
+  if (PackedAabbTree::is_leaf(tree.root_link())) {
+    leaf(PackedAabbTree::facet(tree.root_link()), t_max);
+    return;
+  }
   const GridRay grid(tree, ray, t_enter);
   const float s_min = grid.s_down(ray.t_min);
   Real t_of_s_max = t_max;
   float s_max = grid.s_up(t_max);
+  // s_max follows t_max (rounded up, so the pruning against it is conservative); recomputed only
+  // when a hit has shortened the ray.
+  const auto update_s_max = [&] {
+    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);
+  };
   const PackedAabbTree::Node* nodes = tree.nodes().data();
   const Triangle* triangles = tree.mesh().triangles.data();
 
   // Entries keep where the ray enters them in grid units (s, single precision: half the stack
-  // of a double t, and no conversion per child); s_max is t_max rounded up, so the pruning
-  // against it is conservative.
+  // of a double t, and no conversion per child).
   struct Entry {
     std::uint32_t link;
     float s_enter;
   };
   Entry stack[kStackSize];
   int top = 0;
-  stack[top++] = {tree.root_link(), s_min};
-  while (top > 0) {
-    const Entry entry = stack[--top];
-    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);  // only when a hit shortened the ray
-    if (entry.s_enter > s_max) continue;  // a closer hit was found since this was pushed
-    ++stats.nodes_visited;
-    if (PackedAabbTree::is_leaf(entry.link)) {
-      if (!leaf(PackedAabbTree::facet(entry.link), t_max)) return;
-      continue;
-    }
-    const PackedAabbTree::Node& node = nodes[entry.link];
+  std::uint32_t current = tree.root_link();  // always an inner node
+  for (;;) {
+    const PackedAabbTree::Node& node = nodes[current];
     float s_enter[kWidth];
     unsigned mask = grid.hits(node, s_min, s_max, s_enter);
     stats.volume_tests += kWidth;
-    // The children met, sorted by entry (insertion sort of at most four), pushed farthest first
-    // so that the nearest is explored first.
+    // The children met, sorted by entry (insertion sort of at most four).
     Entry hits[kWidth];
     int count = 0;
     while (mask != 0) {
@@ -519,7 +533,38 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
       for (; k > 0 && hits[k - 1].s_enter > s; --k) hits[k] = hits[k - 1];
       hits[k] = {link, s};
     }
-    for (int k = count - 1; k >= 0; --k) stack[top++] = hits[k];
+    // Nearest first: leaves ahead of the first inner child are tested at once, that child is
+    // entered directly, and the rest wait on the stack (farthest deepest). A leaf or node that a
+    // hit has moved beyond the ray's end is dropped.
+    int k = 0;
+    for (; k < count && PackedAabbTree::is_leaf(hits[k].link); ++k) {
+      if (hits[k].s_enter > s_max) continue;
+      ++stats.nodes_visited;
+      if (!leaf(PackedAabbTree::facet(hits[k].link), t_max)) return;
+      update_s_max();
+    }
+    if (k < count && hits[k].s_enter > s_max) count = k;  // the rest lie farther still
+    bool descend = false;
+    if (k < count) {
+      ++stats.nodes_visited;
+      current = hits[k].link;
+      descend = true;
+    }
+    for (int j = count - 1; j > k; --j) stack[top++] = hits[j];
+    if (descend) continue;
+    // Next from the stack, skipping what lies beyond the ray's end; leaves are tested here.
+    for (;;) {
+      if (top == 0) return;
+      const Entry entry = stack[--top];
+      if (entry.s_enter > s_max) continue;
+      ++stats.nodes_visited;
+      if (!PackedAabbTree::is_leaf(entry.link)) {
+        current = entry.link;
+        break;
+      }
+      if (!leaf(PackedAabbTree::facet(entry.link), t_max)) return;
+      update_s_max();
+    }
   }
 }
 
