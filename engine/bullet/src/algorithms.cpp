@@ -200,7 +200,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     const TriangleMesh& m = mesh.mesh();
     const std::vector<std::uint8_t>& active = mesh.activeEdges();
     ContactPoint out[std::max(kMaxBoxTriangleContacts, kMaxPolyhedronTriangleContacts)];
-    auto run = [&](const auto& query, auto&& contact_fn) {
+    auto run = [&](const auto& query, auto&& contact_fn, FacetTest test = FacetTest::exact_triangle) {
       mesh.tree().query_overlap(query, [&](FacetId f) {
         mesh.countNarrowphaseTriangles(1);
         const int n = contact_fn(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), out);
@@ -211,7 +211,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
             contacts.push_back(out[i]);
         }
         return true;
-      });
+      }, nullptr, test);
     };
     switch (convex.getShapeType()) {
       case SPHERE_SHAPE_PROXYTYPE: {
@@ -258,7 +258,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
           const int n = contact_polyhedron_triangle(hull, a, b, c, hull_options, o);
           for (int i = 0; i < n; ++i) o[i].depth += hull_margin;
           return n;
-        });
+        }, FacetTest::leaf_volume);  // the hull's own axes reject what the box's triangle test would (as in the ODE adapter)
         break;
       }
     }

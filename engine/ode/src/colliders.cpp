@@ -93,7 +93,8 @@ Real merge_distance_for(const GeomObject& object, Real shape_size) {
 // by the margin), `per_facet(a, b, c, options, out)` the core routine for one triangle.
 template <class Query, class PerFacet>
 int collide_convex_shape(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip, const Query& query,
-                         Real shape_size, const RigidTransform& world_from_mesh, PerFacet&& per_facet) {
+                         Real shape_size, const RigidTransform& world_from_mesh, PerFacet&& per_facet,
+                         FacetTest test = FacetTest::exact_triangle) {
   GeomObject& object = *object_of(o1);
   const ContactArray out{o1, o2, flags, contact, skip};
   const ContactOptions options = options_of(object);
@@ -116,7 +117,7 @@ int collide_convex_shape(dGeomID o1, dGeomID o2, int flags, dContactGeom* contac
       contacts.push_back(found[i]);
     }
     return !(out.unimportant() && contacts.size() >= std::size_t(out.capacity()));
-  });
+  }, nullptr, test);
   object.calls.fetch_add(1, std::memory_order_relaxed);
   object.candidate_facets.fetch_add(candidates, std::memory_order_relaxed);
   return write_contacts(object, out, world_from_mesh, contacts, merge_distance_for(object, shape_size), true, false);
@@ -220,14 +221,20 @@ int collide_convex(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int
   query.half_extents = (local.extent() * Real(0.5)).array() + object.settings.margin;
   if (entry->polyhedron) {
     // Faces known: the exact separating-axis narrowphase, on the hull moved into the mesh's frame
-    // once per call.
+    // once per call. The query stops at the leaf boxes: the narrowphase's first axes (the
+    // triangle's normal, the hull's faces at three dot products each) reject the facets the box's
+    // exact triangle test would have, and the box is looser than the hull anyway (ODE drop scene,
+    // pair_replay --only convex: 17.6 -> 15.4 us per call, 37.1 instead of 27.9 facets, the same
+    // contacts; the box's and cylinder's narrowphases reject a facet at a higher cost, so they
+    // keep the exact test).
     thread_local ConvexPolyhedron hull;
     transform_polyhedron(*entry->polyhedron, mesh_from_convex, hull);
     return collide_convex_shape(
         o1, o2, flags, contact, skip, query, local.extent().norm() / 2, world_from_mesh,
         [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* found) {
           return contact_polyhedron_triangle(hull, a, b, c, o, found);
-        });
+        },
+        FacetTest::leaf_volume);
   }
   thread_local std::vector<Vec3> points;
   points.resize(entry->points.size());
