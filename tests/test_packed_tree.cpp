@@ -236,6 +236,114 @@ TEST(PackedTree, CollideSmallBodyOnLargeMesh) {
   }
 }
 
+// ray_closest_hits walks several rays in turns: each answer must be brute force's closest hit and
+// bit-identical to ray_closest_hit's (the same walk), whatever the batch size around the lane
+// count, with invalid rays, misses and segments mixed in, and the statistics the sum of the
+// single queries'.
+// `brute_every`: brute force on every that-many'th ray (large meshes; the single query is
+// cross-checked against brute force on every ray elsewhere).
+void check_batched_rays(const TriangleMesh& mesh, const std::string& name, std::uint64_t seed,
+                        std::size_t brute_every = 1) {
+  const PackedAabbTree packed(build_tree<Aabb>(mesh));
+  const Aabb box = mesh_bounds(mesh);
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  Random r(seed);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 301; ++i) {
+    Ray ray;
+    ray.origin = random_point_near(r, box, 0.5);
+    if (i % 2 == 0) {
+      const FacetId f = FacetId(r.next() % mesh.facet_count());
+      const Vec3 target = (mesh.corner(f, 0) + mesh.corner(f, 1) + mesh.corner(f, 2)) / 3;
+      ray.direction = target - ray.origin;
+    } else {
+      ray.direction = r.unit_vector();
+    }
+    if (i % 5 == 0) ray.t_max = r.uniform(0.2, 2);
+    if (i % 37 == 3) ray.origin.x() = nan;           // invalid: no hit
+    if (i % 41 == 4) ray.direction = Vec3::Zero();   // invalid: no hit
+    if (i % 43 == 5) ray.t_min = ray.t_max = 1e30;  // starts beyond the mesh
+    rays.push_back(ray);
+  }
+  int hits = 0;
+  for (const std::size_t count : {std::size_t(0), std::size_t(1), std::size_t(7), std::size_t(8), std::size_t(9),
+                                  rays.size()}) {
+    std::vector<std::optional<RayHit>> got(count, RayHit{});  // every slot must be written
+    QueryStats batch_stats;
+    ray_closest_hits(packed, rays.data(), count, got.data(), &batch_stats);
+    QueryStats single_stats;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::optional<RayHit> single = ray_closest_hit(packed, rays[i], &single_stats);
+      ASSERT_EQ(got[i].has_value(), single.has_value()) << name << " ray " << i;
+      if (i % brute_every == 0) {
+        const std::vector<RayHit> expected = brute_ray_all_hits(mesh, rays[i]);
+        ASSERT_EQ(got[i].has_value(), !expected.empty()) << name << " ray " << i << " of " << count;
+        if (got[i]) {
+          EXPECT_EQ(got[i]->facet, expected.front().facet) << name << " ray " << i;
+          EXPECT_EQ(got[i]->t, expected.front().t) << name << " ray " << i;
+        }
+      }
+      if (!got[i]) continue;
+      ++hits;
+      EXPECT_EQ(got[i]->facet, single->facet);
+      EXPECT_EQ(got[i]->t, single->t);
+      EXPECT_EQ(got[i]->u, single->u);
+      EXPECT_EQ(got[i]->v, single->v);
+    }
+    EXPECT_EQ(batch_stats.nodes_visited, single_stats.nodes_visited) << name << " batch of " << count;
+    EXPECT_EQ(batch_stats.volume_tests, single_stats.volume_tests) << name << " batch of " << count;
+    EXPECT_EQ(batch_stats.leaf_tests, single_stats.leaf_tests) << name << " batch of " << count;
+  }
+  EXPECT_GT(hits, 100) << name << ": the test must exercise hits";
+}
+
+TEST(PackedTree, BatchedRaysMatchSingleRaysAndBruteForce) {
+  for (const auto& [name, mesh] : procedural_meshes()) {
+    if (compute_mesh_stats(mesh).degenerate_facets == mesh.facet_count()) continue;  // never hit
+    check_batched_rays(mesh, name, 5);
+  }
+  check_batched_rays(make_terrain(64, 64, 3), "terrain 64", 6);
+  // Above the size where the rays' walks take turns (2 MB of hierarchy and mesh; these three are
+  // the tree's nodes, the triangles and the vertices).
+  const TriangleMesh large = make_terrain(256, 256, 4);
+  const PackedAabbTree large_tree(build_tree<Aabb>(large));
+  ASSERT_GT(large_tree.memory_bytes() + large.triangles.size() * sizeof(Triangle) + large.vertices.size() * sizeof(Vec3),
+            std::size_t(2) << 20);
+  check_batched_rays(large, "terrain 256", 7, 10);
+}
+
+TEST(PackedTree, BatchedRaysOnTinyTrees) {
+  // One facet (the root is a leaf: answered when the walk starts) and two.
+  TriangleMesh one;
+  one.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  one.triangles = {{0, 1, 2}};
+  TriangleMesh two = one;
+  two.vertices.push_back(Vec3(1, 1, 0));
+  two.triangles.push_back({1, 3, 2});
+  for (const TriangleMesh& mesh : {one, two}) {
+    const PackedAabbTree packed(build_tree<Aabb>(mesh));
+    std::vector<Ray> rays;
+    for (int i = 0; i < 20; ++i) rays.push_back(Ray{Vec3(0.05 * i, 0.25, 1), Vec3(0, 0, -1)});
+    std::vector<std::optional<RayHit>> got(rays.size());
+    ray_closest_hits(packed, rays.data(), rays.size(), got.data());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const std::optional<RayHit> single = ray_closest_hit(packed, rays[i]);
+      ASSERT_EQ(got[i].has_value(), single.has_value()) << mesh.facet_count() << " facets, ray " << i;
+      if (single) {
+        EXPECT_EQ(got[i]->facet, single->facet);
+      }
+    }
+    EXPECT_TRUE(got[0].has_value());
+    EXPECT_EQ(got[19].has_value(), mesh.facet_count() == 2);  // (0.95, 0.25): only in the second triangle
+  }
+  // An empty tree answers every ray with no hit.
+  const PackedAabbTree empty;
+  std::vector<Ray> rays(3, Ray{Vec3::Zero(), Vec3::UnitZ()});
+  std::vector<std::optional<RayHit>> got(3, RayHit{});
+  ray_closest_hits(empty, rays.data(), rays.size(), got.data());
+  for (const auto& hit : got) EXPECT_FALSE(hit.has_value());
+}
+
 TEST(PackedTree, UnboundedAndBadQueries) {
   const TriangleMesh mesh = make_terrain(16, 16, 2);
   const PackedAabbTree packed(build_tree<Aabb>(mesh));

@@ -418,9 +418,10 @@ inline float next_float_down(float f) { return -next_float_up(-f); }
 struct GridRay {
   Real base = 0;
   Real scale = 1;
-  float origin[3];
-  float inv_direction[3];
+  float origin[3] = {};
+  float inv_direction[3] = {};
 
+  GridRay() = default;
   GridRay(const PackedAabbTree& tree, const Ray& ray, Real t_first) : base(t_first) {
     const Vec3 start = ray.origin + t_first * ray.direction;
     Vec3 o = (start - tree.origin()).cwiseProduct(tree.inv_step());  // rounding: far below the grid steps
@@ -476,45 +477,62 @@ struct GridRay {
   }
 };
 
-// Front-to-back ray walk. `leaf(facet, t_max)` may lower t_max (which prunes everything entered
-// farther) and returns false to stop the walk.
-template <class Leaf>
-void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
-  if (tree.empty() || !is_valid(ray)) return;
-  Real t_max = ray.t_max;
-  Real t_enter = 0;
-  ++stats.volume_tests;
-  if (!intersect_ray(tree.bounds(), RayPrecomputed(ray), ray.t_min, t_max, &t_enter)) return;
-  ++stats.nodes_visited;
-  if (PackedAabbTree::is_leaf(tree.root_link())) {
-    leaf(PackedAabbTree::facet(tree.root_link()), t_max);
-    return;
+// Front-to-back ray walk, one inner node per step(), so that several rays' walks can take turns
+// (ray_closest_hits). `leaf(facet, t_max)` may lower t_max (which prunes everything entered
+// farther) and returns false to stop the walk. kDeferLeaves (for walks that take turns): a leaf
+// takes two steps of its own, the first starting the loads of its corners (their indices were
+// requested when the leaf was found), the second testing it, so that those loads too overlap
+// the other walks' work.
+template <bool kDeferLeaves = false>
+class OrderedRayWalk {
+ public:
+  // False when there is nothing to walk (an invalid ray, or one that misses the mesh's bounds);
+  // a single-facet tree's leaf is visited here.
+  template <class Leaf>
+  bool start(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
+    if (tree.empty() || !is_valid(ray)) return false;
+    t_max_ = ray.t_max;
+    Real t_enter = 0;
+    ++stats.volume_tests;
+    if (!intersect_ray(tree.bounds(), RayPrecomputed(ray), ray.t_min, t_max_, &t_enter)) return false;
+    ++stats.nodes_visited;
+    if (PackedAabbTree::is_leaf(tree.root_link())) {
+      leaf(PackedAabbTree::facet(tree.root_link()), t_max_);
+      return false;
+    }
+    grid_ = GridRay(tree, ray, t_enter);
+    s_min_ = grid_.s_down(ray.t_min);
+    t_of_s_max_ = t_max_;
+    s_max_ = grid_.s_up(t_max_);
+    nodes_ = tree.nodes().data();
+    triangles_ = tree.mesh().triangles.data();
+    vertices_ = tree.mesh().vertices.data();
+    top_ = 0;
+    corners_requested_ = false;
+    current_ = tree.root_link();
+    __builtin_prefetch(&nodes_[current_]);
+    return true;
   }
-  const GridRay grid(tree, ray, t_enter);
-  const float s_min = grid.s_down(ray.t_min);
-  Real t_of_s_max = t_max;
-  float s_max = grid.s_up(t_max);
-  // s_max follows t_max (rounded up, so the pruning against it is conservative); recomputed only
-  // when a hit has shortened the ray.
-  const auto update_s_max = [&] {
-    if (t_max != t_of_s_max) s_max = grid.s_up(t_of_s_max = t_max);
-  };
-  const PackedAabbTree::Node* nodes = tree.nodes().data();
-  const Triangle* triangles = tree.mesh().triangles.data();
 
-  // Entries keep where the ray enters them in grid units (s, single precision: half the stack
-  // of a double t, and no conversion per child).
-  struct Entry {
-    std::uint32_t link;
-    float s_enter;
-  };
-  Entry stack[kStackSize];
-  int top = 0;
-  std::uint32_t current = tree.root_link();  // always an inner node
-  for (;;) {
-    const PackedAabbTree::Node& node = nodes[current];
+  // Tests the current node's children, the leaves ahead of its nearest inner child, and moves to
+  // the next node (its load started); false when the walk is over.
+  template <class Leaf>
+  bool step(Leaf&& leaf, QueryStats& stats) {
+    if (kDeferLeaves && PackedAabbTree::is_leaf(current_)) {
+      const FacetId f = PackedAabbTree::facet(current_);
+      if (!corners_requested_) {
+        for (const VertexId v : triangles_[f]) __builtin_prefetch(&vertices_[v]);
+        corners_requested_ = true;
+        return true;
+      }
+      corners_requested_ = false;
+      if (!leaf(f, t_max_)) return false;
+      update_s_max();
+      return next_from_stack(leaf, stats);
+    }
+    const PackedAabbTree::Node& node = nodes_[current_];
     float s_enter[kWidth];
-    unsigned mask = grid.hits(node, s_min, s_max, s_enter);
+    unsigned mask = grid_.hits(node, s_min_, s_max_, s_enter);
     stats.volume_tests += kWidth;
     // The children met, sorted by entry (insertion sort of at most four).
     Entry hits[kWidth];
@@ -526,8 +544,8 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
       if (link == PackedAabbTree::kEmpty) continue;
       // Start loading what the child will need: its node, or a leaf's vertex indices (the
       // vertices themselves depend on them).
-      if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes[link]);
-      else __builtin_prefetch(&triangles[PackedAabbTree::facet(link)]);
+      if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes_[link]);
+      else __builtin_prefetch(&triangles_[PackedAabbTree::facet(link)]);
       const float s = s_enter[slot];  // at least s_min: hits() starts from it
       int k = count++;
       for (; k > 0 && hits[k - 1].s_enter > s; --k) hits[k] = hits[k - 1];
@@ -537,59 +555,173 @@ void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, Q
     // entered directly, and the rest wait on the stack (farthest deepest). A leaf or node that a
     // hit has moved beyond the ray's end is dropped.
     int k = 0;
-    for (; k < count && PackedAabbTree::is_leaf(hits[k].link); ++k) {
-      if (hits[k].s_enter > s_max) continue;
-      ++stats.nodes_visited;
-      if (!leaf(PackedAabbTree::facet(hits[k].link), t_max)) return;
-      update_s_max();
+    if (!kDeferLeaves) {
+      for (; k < count && PackedAabbTree::is_leaf(hits[k].link); ++k) {
+        if (hits[k].s_enter > s_max_) continue;
+        ++stats.nodes_visited;
+        if (!leaf(PackedAabbTree::facet(hits[k].link), t_max_)) return false;
+        update_s_max();
+      }
     }
-    if (k < count && hits[k].s_enter > s_max) count = k;  // the rest lie farther still
-    bool descend = false;
+    if (k < count && hits[k].s_enter > s_max_) count = k;  // the rest lie farther still
+    for (int j = count - 1; j > k; --j) stack_[top_++] = hits[j];
     if (k < count) {
       ++stats.nodes_visited;
-      current = hits[k].link;
-      descend = true;
+      current_ = hits[k].link;
+      return true;
     }
-    for (int j = count - 1; j > k; --j) stack[top++] = hits[j];
-    if (descend) continue;
-    // Next from the stack, skipping what lies beyond the ray's end; leaves are tested here.
+    return next_from_stack(leaf, stats);
+  }
+
+ private:
+  // Entries keep where the ray enters them in grid units (s, single precision: half the stack
+  // of a double t, and no conversion per child).
+  struct Entry {
+    std::uint32_t link;
+    float s_enter;
+  };
+  // Next from the stack, skipping what lies beyond the ray's end; leaves are tested here (or
+  // entered, when deferred).
+  template <class Leaf>
+  bool next_from_stack(Leaf&& leaf, QueryStats& stats) {
     for (;;) {
-      if (top == 0) return;
-      const Entry entry = stack[--top];
-      if (entry.s_enter > s_max) continue;
+      if (top_ == 0) return false;
+      const Entry entry = stack_[--top_];
+      if (entry.s_enter > s_max_) continue;
       ++stats.nodes_visited;
-      if (!PackedAabbTree::is_leaf(entry.link)) {
-        current = entry.link;
-        break;
+      if (kDeferLeaves || !PackedAabbTree::is_leaf(entry.link)) {
+        current_ = entry.link;
+        return true;
       }
-      if (!leaf(PackedAabbTree::facet(entry.link), t_max)) return;
+      if (!leaf(PackedAabbTree::facet(entry.link), t_max_)) return false;
       update_s_max();
     }
   }
+
+  // s_max follows t_max (rounded up, so the pruning against it is conservative); recomputed only
+  // when a hit has shortened the ray.
+  void update_s_max() {
+    if (t_max_ != t_of_s_max_) s_max_ = grid_.s_up(t_of_s_max_ = t_max_);
+  }
+
+  GridRay grid_;
+  Real t_max_ = 0;
+  Real t_of_s_max_ = 0;
+  float s_min_ = 0;
+  float s_max_ = 0;
+  const PackedAabbTree::Node* nodes_ = nullptr;
+  const Triangle* triangles_ = nullptr;
+  const Vec3* vertices_ = nullptr;
+  std::uint32_t current_ = 0;  // an inner node, or with kDeferLeaves also a leaf
+  bool corners_requested_ = false;
+  int top_ = 0;
+  Entry stack_[kStackSize];
+};
+
+template <class Leaf>
+void ordered_ray_walk(const PackedAabbTree& tree, const Ray& ray, Leaf&& leaf, QueryStats& stats) {
+  OrderedRayWalk<> walk;
+  if (!walk.start(tree, ray, leaf, stats)) return;
+  while (walk.step(leaf, stats)) {
+  }
 }
+
+// The closest-hit leaf test: the watertight triangle test on the ray shortened to the best hit.
+class ClosestHit {
+ public:
+  ClosestHit() = default;
+  ClosestHit(const TriangleMesh& mesh, const Ray& ray, QueryStats& stats)
+      : mesh_(&mesh), ray_(ray), shear_(ray_shear(ray.direction)), stats_(&stats) {}
+  bool operator()(FacetId f, Real& t_max) {
+    ++stats_->leaf_tests;
+    TriangleHit hit;
+    Ray clipped = ray_;
+    clipped.t_max = t_max;
+    if (intersect_ray_triangle(clipped, shear_, mesh_->corner(f, 0), mesh_->corner(f, 1), mesh_->corner(f, 2), hit)) {
+      if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
+      t_max = std::min(t_max, best->t);
+    }
+    return true;
+  }
+  std::optional<RayHit> best;
+
+ private:
+  const TriangleMesh* mesh_ = nullptr;
+  Ray ray_;
+  RayShear shear_;
+  QueryStats* stats_ = nullptr;
+};
 
 }  // namespace
 
 std::optional<RayHit> ray_closest_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
   StatsSink sink(stats);
-  std::optional<RayHit> best;
-  const RayShear shear = ray_shear(ray.direction);
-  ordered_ray_walk(
-      tree, ray,
-      [&](FacetId f, Real& t_max) {
-        ++sink.local.leaf_tests;
-        const TriangleMesh& mesh = tree.mesh();
-        TriangleHit hit;
-        Ray clipped = ray;
-        clipped.t_max = t_max;
-        if (intersect_ray_triangle(clipped, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) {
-          if (!best || hit.t < best->t || (hit.t == best->t && f < best->facet)) best = RayHit{f, hit.t, hit.u, hit.v};
-          t_max = std::min(t_max, best->t);
-        }
-        return true;
-      },
-      sink.local);
-  return best;
+  if (tree.empty()) return std::nullopt;
+  ClosestHit leaf(tree.mesh(), ray, sink.local);
+  ordered_ray_walk(tree, ray, leaf, sink.local);
+  return leaf.best;
+}
+
+void ray_closest_hits(const PackedAabbTree& tree, const Ray* rays, std::size_t count, std::optional<RayHit>* hits,
+                      QueryStats* stats) {
+  // Each lane walks one ray; the lanes take turns one node (or one half of a leaf) at a time, so
+  // that the load one lane has started (its next node, a leaf's corners) completes while the
+  // others work. On the 524k-facet terrain this gives 1.5x the rays per second of one ray after
+  // another, but where the hierarchy and the mesh fit in the caches the turns cost more than
+  // they hide (10k facets: 0.73x): the rays then go one by one. Measured on a 1 MB L2: 32k facets
+  // (1.5 MB) 0.9-0.95x, the 69k-facet bunny (3.2 MB) 1.06-1.14x; hence the 2 MB threshold. 4 to
+  // 16 lanes give the same within 10%.
+  StatsSink sink(stats);
+  if (tree.empty()) {
+    std::fill(hits, hits + count, std::nullopt);
+    return;
+  }
+  const TriangleMesh& mesh = tree.mesh();
+  constexpr std::size_t kInterleaveAboveBytes = std::size_t(2) << 20;
+  if (tree.memory_bytes() + mesh.triangles.size() * sizeof(Triangle) + mesh.vertices.size() * sizeof(Vec3) <
+      kInterleaveAboveBytes) {
+    for (std::size_t i = 0; i < count; ++i) hits[i] = ray_closest_hit(tree, rays[i], &sink.local);
+    return;
+  }
+  constexpr int kLanes = 8;
+  struct Lane {
+    OrderedRayWalk<true> walk;
+    ClosestHit leaf;
+    std::size_t ray = 0;
+  };
+  Lane lanes[kLanes];
+  int active[kLanes];
+  int active_count = 0;
+  std::size_t next = 0;
+  // Starts the next ray that needs a walk in `lane`; rays that end at their start are answered.
+  const auto start_next = [&](Lane& lane) {
+    while (next < count) {
+      const std::size_t i = next++;
+      lane.leaf = ClosestHit(mesh, rays[i], sink.local);
+      lane.ray = i;
+      if (lane.walk.start(tree, rays[i], lane.leaf, sink.local)) return true;
+      hits[i] = lane.leaf.best;
+    }
+    return false;
+  };
+  for (int l = 0; l < kLanes; ++l) {
+    if (start_next(lanes[l])) active[active_count++] = l;
+  }
+  while (active_count > 0) {
+    for (int a = 0; a < active_count;) {
+      Lane& lane = lanes[active[a]];
+      if (lane.walk.step(lane.leaf, sink.local)) {
+        ++a;
+        continue;
+      }
+      hits[lane.ray] = lane.leaf.best;
+      if (start_next(lane)) {
+        ++a;
+      } else {
+        active[a] = active[--active_count];
+      }
+    }
+  }
 }
 
 void ray_candidates(const PackedAabbTree& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,

@@ -101,6 +101,11 @@ static_assert(sizeof(PackedAabbTree::Node) == 64, "four 16-bit boxes and four li
 
 // The queries of query.h and collide.h, with the same contracts, on the packed form.
 std::optional<RayHit> ray_closest_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats = nullptr);
+// The closest hits of `count` rays: hits[i] is exactly ray_closest_hit(tree, rays[i]). For many
+// rays at once (sensors, visibility, bakes): the rays' walks take turns node by node, so that on
+// a mesh larger than the caches one ray's loads overlap the others' work.
+void ray_closest_hits(const PackedAabbTree& tree, const Ray* rays, std::size_t count, std::optional<RayHit>* hits,
+                      QueryStats* stats = nullptr);
 void ray_candidates(const PackedAabbTree& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
                     QueryStats* stats = nullptr);
 std::optional<RayHit> ray_any_hit(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats = nullptr);
