@@ -1,5 +1,6 @@
 #include "boxtree/any_tree.h"
 
+#include <algorithm>
 #include <typeinfo>
 
 #include "boxtree/detail/volume_kinds.h"
@@ -58,6 +59,14 @@ Aabb AnyTree::bounds() const {
 
 std::optional<RayHit> AnyTree::ray_closest_hit(const Ray& ray, QueryStats* stats) const {
   return impl_ ? impl_->ray_closest_hit(ray, stats) : std::nullopt;
+}
+void AnyTree::ray_closest_hits(const Ray* rays, std::size_t count, std::optional<RayHit>* hits,
+                               QueryStats* stats) const {
+  if (impl_) {
+    impl_->ray_closest_hits(rays, count, hits, stats);
+  } else {
+    std::fill(hits, hits + count, std::nullopt);
+  }
 }
 void AnyTree::ray_candidates(const Ray& ray, FunctionRef<Real(FacetId, Real)> visit, QueryStats* stats) const {
   if (impl_) impl_->ray_candidates(ray, visit, stats);
