@@ -1014,9 +1014,11 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
         child.b.value = link_b * kWidth + std::uint32_t(slot);
         child.box_b = box_of(b, child.b);
       }
-      // An inner child that passed the culling is entered without the exact test's nine edge
-      // axes (its children get culled next anyway); a leaf gets it before its triangle tests.
-      if (!PackedAabbTree::is_leaf(split.link[slot]) || overlaps(child.box_a, child.box_b, a_from_b)) stack[top++] = child;
+      // A child that passed the culling is entered without the exact box test's nine edge axes:
+      // an inner one gets its children culled next, and a leaf pair goes to the triangle test,
+      // which starts with the triangles' own boxes. The edge axes rejected 21 of 86,407 leaf
+      // pairs on the 9,996-facet spheres at gap 0 and took a quarter of the time.
+      stack[top++] = child;
     }
   }
 }
