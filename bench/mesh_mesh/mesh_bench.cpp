@@ -16,7 +16,8 @@
 //                 included); FCL: num_bv_tests (FCL skips the volume test of leaf-leaf pairs,
 //                 which favours it slightly). GImpact and ODE expose no counter.
 //   seconds       the queries alone: the sum over the poses of each pose's fastest of --repeats
-//                 runs (the least disturbed on a shared machine). boxtree: collide() with a visitor that stores the pairs.
+//                 runs (the least disturbed on a shared machine). boxtree: AnyTree::collide with a visitor that
+//                 stores the pairs (the packed forms for aabb and plain pie slices; `-exact`: Tree<V>).
 //                 FCL: fcl::detail::initialize + collide (for AABB, initialize re-builds b's tree
 //                 in a's frame at every non-identity pose: FCL's own way, see fcl_peer.h).
 //                 GImpact: btGImpactQuantizedBvh::find_collision + triangles_intersect on the
@@ -49,6 +50,7 @@
 #include <sstream>
 
 #include "bench_report.h"
+#include "boxtree/any_tree.h"
 #include "boxtree/build.h"
 #include "boxtree/collide.h"
 #include "boxtree/error.h"
@@ -177,20 +179,42 @@ struct BoxtreeResult {
 // The fastest of the repeated runs: on a shared machine the least disturbed one.
 double fastest(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
 
+// A boxtree method as the bench names it: `aabb` and the plain pie-slice methods run the packed
+// forms AnyTree holds (what the engine adapters collide), and the same name + `-exact` (e.g.
+// `aabb-exact`, `pie-min-general-tight-exact`) runs the exact Tree<V> beside them; the other
+// methods have only their exact trees.
+struct BenchMethod {
+  Method method;
+  bool exact = false;
+  std::string name;
+};
+
+BenchMethod parse_bench_method(const std::string& name) {
+  const std::string suffix = "-exact";
+  const bool exact = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return {parse_method(exact ? name.substr(0, name.size() - suffix.size()) : name), exact, name};
+}
+
 // Trees by (mesh, method), so that a mesh shared by several cases (a sphere against each gap's
 // sphere, the bunny against itself) is built once; each entry keeps its build time.
 class TreeCache {
  public:
-  template <class V>
-  std::pair<std::shared_ptr<const Tree<V>>, double> get(const std::shared_ptr<const TriangleMesh>& mesh,
-                                                         const Method& method) {
-    Entry& e = entries_[{mesh.get(), method_name(method)}];
+  std::pair<std::shared_ptr<const AnyTree>, double> get(const std::shared_ptr<const TriangleMesh>& mesh,
+                                                         const BenchMethod& m) {
+    Entry& e = entries_[{mesh.get(), m.name}];
     if (!e.tree) {
       const auto start = Clock::now();
-      e.tree = std::make_shared<const Tree<V>>(build_tree<V>(mesh, settings_for(method)));
+      if (m.exact) {
+        e.tree = with_method(m.method, [&](auto tag) {
+          using V = typename decltype(tag)::type;
+          return std::make_shared<const AnyTree>(build_tree<V>(mesh, settings_for(m.method)), m.method);
+        });
+      } else {
+        e.tree = std::make_shared<const AnyTree>(AnyTree::build(mesh, m.method));
+      }
       e.seconds = seconds_since(start);
     }
-    return {std::static_pointer_cast<const Tree<V>>(e.tree), e.seconds};
+    return {e.tree, e.seconds};
   }
   // Drops the trees of every mesh not in `keep`.
   void keep_only(const std::vector<const TriangleMesh*>& keep) {
@@ -200,42 +224,39 @@ class TreeCache {
 
  private:
   struct Entry {
-    std::shared_ptr<const void> tree;
+    std::shared_ptr<const AnyTree> tree;
     double seconds = 0;
   };
   std::map<std::pair<const TriangleMesh*, std::string>, Entry> entries_;
 };
 
-BoxtreeResult run_boxtree(const Method& method, const Case& c, TreeCache& cache, PosePairs* pose_pairs) {
-  return with_method(method, [&](auto tag) {
-    using V = typename decltype(tag)::type;
-    BoxtreeResult r;
-    r.method = method_name(method);
-    const auto [a, seconds_a] = cache.get<V>(c.a, method);
-    const auto [b, seconds_b] = cache.get<V>(c.b, method);
-    r.build_seconds = (seconds_a + seconds_b) / 2;
-    pose_pairs->assign(c.poses.size(), {});
-    std::vector<FacetPair> found;
-    for (std::size_t p = 0; p < c.poses.size(); ++p) {
-      std::vector<double> times;
-      for (int rep = 0; rep < std::max(1, c.repeats); ++rep) {
-        found.clear();
-        QueryStats stats;
-        const auto start = Clock::now();
-        collide<V>(*a, *b, c.poses[p], [&](const FacetPair& pair) { return found.push_back(pair), true; }, &stats);
-        times.push_back(seconds_since(start));
-        if (rep > 0) continue;
-        r.volume_tests += stats.volume_tests;
-        r.leaf_tests += stats.leaf_tests;
-        r.pairs += found.size();
-        PairList& list = (*pose_pairs)[p];
-        for (const FacetPair& f : found) list.emplace_back(f.a, f.b);
-        std::sort(list.begin(), list.end());
-      }
-      r.seconds += fastest(times);
+BoxtreeResult run_boxtree(const BenchMethod& method, const Case& c, TreeCache& cache, PosePairs* pose_pairs) {
+  BoxtreeResult r;
+  r.method = method.name;
+  const auto [a, seconds_a] = cache.get(c.a, method);
+  const auto [b, seconds_b] = cache.get(c.b, method);
+  r.build_seconds = (seconds_a + seconds_b) / 2;
+  pose_pairs->assign(c.poses.size(), {});
+  std::vector<FacetPair> found;
+  for (std::size_t p = 0; p < c.poses.size(); ++p) {
+    std::vector<double> times;
+    for (int rep = 0; rep < std::max(1, c.repeats); ++rep) {
+      found.clear();
+      QueryStats stats;
+      const auto start = Clock::now();
+      a->collide(*b, c.poses[p], [&](const FacetPair& pair) { return found.push_back(pair), true; }, &stats);
+      times.push_back(seconds_since(start));
+      if (rep > 0) continue;
+      r.volume_tests += stats.volume_tests;
+      r.leaf_tests += stats.leaf_tests;
+      r.pairs += found.size();
+      PairList& list = (*pose_pairs)[p];
+      for (const FacetPair& f : found) list.emplace_back(f.a, f.b);
+      std::sort(list.begin(), list.end());
     }
-    return r;
-  });
+    r.seconds += fastest(times);
+  }
+  return r;
 }
 
 // ---- output helpers ----
@@ -278,7 +299,7 @@ int check_pairs(const std::string& case_name, const std::string& source, const P
   return bad;
 }
 
-CaseResult run_case(const Case& c, const std::vector<Method>& methods, TreeCache& cache, bool with_fcl, bool with_gimpact,
+CaseResult run_case(const Case& c, const std::vector<BenchMethod>& methods, TreeCache& cache, bool with_fcl, bool with_gimpact,
                     bool with_ode, double brute_budget) {
   CaseResult r;
   r.name = c.name;
@@ -325,11 +346,11 @@ CaseResult run_case(const Case& c, const std::vector<Method>& methods, TreeCache
   return r;
 }
 
-std::vector<Method> parse_methods(const std::string& text) {
-  std::vector<Method> methods;
+std::vector<BenchMethod> parse_methods(const std::string& text) {
+  std::vector<BenchMethod> methods;
   for (std::size_t start = 0; start <= text.size();) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
-    if (comma > start) methods.push_back(parse_method(text.substr(start, comma - start)));
+    if (comma > start) methods.push_back(parse_bench_method(text.substr(start, comma - start)));
     start = comma + 1;
   }
   if (methods.empty()) throw Error("--methods: no method given");
@@ -498,7 +519,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Mesh vs mesh (issue 7, section 2): boxtree vs FCL, Bullet GImpact and ODE trimesh"};
   std::string json_path, markdown_path;
   std::string mesh_dir = std::string(BOXTREE_REPO_DIR) + "/../shared/meshes";
-  std::string methods_text = "aabb,obb-min,obb-min-tight,pie-min-general-tight,obb-all-tight,obb-min-tight+aabb@6";
+  std::string methods_text =
+      "aabb,aabb-exact,obb-min,obb-min-tight,pie-min-general-tight,obb-all-tight,obb-min-tight+aabb@6";
   std::string bunny_file = "stanford_bunny_res3.obj";
   bool quick = false, with_fcl = true, with_gimpact = true, with_ode = true;
   int repeats = 5, bunny_poses = 50, env_poses = 100;
@@ -519,7 +541,7 @@ int main(int argc, char** argv) {
 
   try {
     const auto wall_start = Clock::now();
-    const std::vector<Method> methods = parse_methods(methods_text);
+    const std::vector<BenchMethod> methods = parse_methods(methods_text);
     with_gimpact = with_gimpact && peers::gimpact_available();
     with_ode = with_ode && peers::ode_available();
     if (quick) bunny_poses = std::min(bunny_poses, 10), env_poses = std::min(env_poses, 20);
@@ -606,6 +628,10 @@ int main(int argc, char** argv) {
          << "up to half its box size per axis; env x rob: PQP's pair, rob at a uniform random rotation and a "
             "translation uniform in env's box. Poses from a fixed seed.\n\n"
          << "Notes:\n"
+            "- boxtree runs `AnyTree::collide` on the form `AnyTree::build` holds, what the engine adapters collide: "
+            "for `aabb` and the plain pie-slice methods the packed trees (4-wide 16-bit boxes; float prisms), for the "
+            "others the exact `Tree<V>`; a name + `-exact` (e.g. `aabb-exact`) is the exact `Tree<V>` of that method, "
+            "whose volume tests are the binary tree's (the packed aabb tree tests up to four children per split).\n"
             "- Volume tests: boxtree counts every volume pair it tests, leaf pairs included; FCL's num_bv_tests skips "
             "leaf-leaf pairs (it goes straight to the triangle test), so FCL is slightly favoured.\n"
             "- Times are the queries alone: the sum over the poses of each pose's fastest of "
