@@ -514,8 +514,9 @@ class OrderedRayWalk {
     return true;
   }
 
-  // Tests the current node's children, the leaves ahead of its nearest inner child, and moves to
-  // the next node (its load started); false when the walk is over.
+  // Tests the current node's children and the leaves ahead of its nearest inner child (deferred:
+  // the nearest child, leaf or not, is next), and moves to the next node (its load started);
+  // false when the walk is over.
   template <class Leaf>
   bool step(Leaf&& leaf, QueryStats& stats) {
     if (kDeferLeaves && PackedAabbTree::is_leaf(current_)) {
