@@ -83,13 +83,6 @@ Measure fastest(int repeats, Build&& build) {
 // --ranking: "" keeps BuildSettings' default.
 std::string g_ranking;
 
-// The bench-only names of the exact trees beside the packed forms AnyTree holds: `aabb-exact`,
-// and a pie-slice method + `-exact` (e.g. `pie-min-exact`, `pie-max-general-tight-exact`).
-bool is_exact_name(const std::string& name) {
-  const std::string suffix = "-exact";
-  return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, const std::string& name) {
   if (name == "aabb") {
     Measure m;
@@ -102,8 +95,11 @@ Measure build_boxtree(const std::shared_ptr<const boxtree::TriangleMesh>& mesh, 
     m.note = "packed: 64 B per 4-wide node, " + with_commas(packed.nodes().size()) + " nodes";
     return m;
   }
-  const bool exact = is_exact_name(name);
-  const boxtree::Method method = boxtree::parse_method(exact ? name.substr(0, name.size() - 6) : name);
+  // The bench-only names of the exact trees beside the packed forms AnyTree holds: `aabb-exact`,
+  // and a pie-slice method + `-exact` (e.g. `pie-min-exact`, `pie-max-general-tight-exact`).
+  const boxtree::bench::ExactSuffix split = boxtree::bench::split_exact_suffix(name);
+  const bool exact = split.exact;  // a plain variable: lambdas below capture it
+  const boxtree::Method method = boxtree::parse_method(split.method);
   boxtree::BuildSettings settings = boxtree::settings_for(method);
   if (g_ranking == "merged-volume") settings.ranking = boxtree::PairRanking::merged_volume;
   if (g_ranking == "bounding-box") settings.ranking = boxtree::PairRanking::bounding_box;
@@ -238,12 +234,13 @@ int main(int argc, char** argv) {
     for (const auto& list : {methods, large_methods})
       for (const auto& m : list) {
         // aabb-exact, pie-...-exact: the bench-only exact trees
-        const boxtree::Method method = boxtree::parse_method(is_exact_name(m) ? m.substr(0, m.size() - 6) : m);
+        const boxtree::bench::ExactSuffix split = boxtree::bench::split_exact_suffix(m);
+        const boxtree::Method method = boxtree::parse_method(split.method);
         using boxtree::VolumeKind;
         const bool pie = method.kind == VolumeKind::pie_max || method.kind == VolumeKind::pie_min ||
                          method.kind == VolumeKind::pie_max_general || method.kind == VolumeKind::pie_min_general;
         const bool packed = method.kind == VolumeKind::aabb || (pie && method.hybrid_level == 0);
-        if (is_exact_name(m) && !packed) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
+        if (split.exact && !packed) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
       }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "build_bench: error: %s\n", e.what());

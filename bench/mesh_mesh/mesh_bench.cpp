@@ -190,9 +190,8 @@ struct BenchMethod {
 };
 
 BenchMethod parse_bench_method(const std::string& name) {
-  const std::string suffix = "-exact";
-  const bool exact = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  return {parse_method(exact ? name.substr(0, name.size() - suffix.size()) : name), exact, name};
+  const bench::ExactSuffix split = bench::split_exact_suffix(name);
+  return {parse_method(split.method), split.exact, name};
 }
 
 // Trees by (mesh, method), so that a mesh shared by several cases (a sphere against each gap's

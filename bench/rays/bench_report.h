@@ -17,6 +17,20 @@ inline double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// The benches' names for the exact trees beside the packed forms AnyTree holds: a method's name
+// + "-exact" (aabb-exact, pie-min-exact, pie-min-general-tight-exact). `method` is the name
+// without the suffix.
+struct ExactSuffix {
+  std::string method;
+  bool exact = false;
+};
+inline ExactSuffix split_exact_suffix(const std::string& name) {
+  const std::string suffix = "-exact";
+  if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+    return {name.substr(0, name.size() - suffix.size()), true};
+  return {name, false};
+}
+
 struct Row {
   std::string section;         // "rays", "build_memory"
   std::string case_name;       // e.g. "terrain-524k/outside"

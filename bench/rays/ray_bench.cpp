@@ -219,9 +219,9 @@ class BoxtreeBatchEngine final : public RayEngine {
 std::unique_ptr<RayEngine> make_boxtree_engine(const std::shared_ptr<const boxtree::TriangleMesh>& mesh,
                                                const std::string& name) {
   if (name == "aabb-batch") return std::make_unique<BoxtreeBatchEngine>(mesh);
-  const std::string suffix = "-exact";
-  const bool exact = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  const boxtree::Method method = boxtree::parse_method(exact ? name.substr(0, name.size() - suffix.size()) : name);
+  const boxtree::bench::ExactSuffix split = boxtree::bench::split_exact_suffix(name);
+  const bool exact = split.exact;  // a plain variable: lambdas below capture it
+  const boxtree::Method method = boxtree::parse_method(split.method);
   return boxtree::with_method(method, [&](auto tag) -> std::unique_ptr<RayEngine> {
     using V = typename decltype(tag)::type;
     if constexpr (std::is_same_v<V, boxtree::Aabb>) {
@@ -332,9 +332,7 @@ int main(int argc, char** argv) {
   if (methods.empty()) methods.push_back("aabb");
   try {
     for (const auto& m : methods)
-      if (m != "aabb-batch")
-        boxtree::parse_method(m.size() > 6 && m.compare(m.size() - 6, 6, "-exact") == 0 ? m.substr(0, m.size() - 6)
-                                                                                    : m);  // -exact: bench-only names
+      if (m != "aabb-batch") boxtree::parse_method(boxtree::bench::split_exact_suffix(m).method);  // bench-only names
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ray_bench: error: %s\n", e.what());
     return 2;
