@@ -236,11 +236,7 @@ int main(int argc, char** argv) {
         // aabb-exact, pie-...-exact: the bench-only exact trees
         const boxtree::bench::ExactSuffix split = boxtree::bench::split_exact_suffix(m);
         const boxtree::Method method = boxtree::parse_method(split.method);
-        using boxtree::VolumeKind;
-        const bool pie = method.kind == VolumeKind::pie_max || method.kind == VolumeKind::pie_min ||
-                         method.kind == VolumeKind::pie_max_general || method.kind == VolumeKind::pie_min_general;
-        const bool packed = method.kind == VolumeKind::aabb || (pie && method.hybrid_level == 0);
-        if (split.exact && !packed) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
+        if (split.exact && !boxtree::bench::has_packed_form(method)) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
       }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "build_bench: error: %s\n", e.what());

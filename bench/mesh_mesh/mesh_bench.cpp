@@ -191,7 +191,11 @@ struct BenchMethod {
 
 BenchMethod parse_bench_method(const std::string& name) {
   const bench::ExactSuffix split = bench::split_exact_suffix(name);
-  return {parse_method(split.method), split.exact, name};
+  const Method method = parse_method(split.method);
+  // As ray_bench and build_bench: elsewhere the exact tree is what the plain name runs already.
+  if (split.exact && !bench::has_packed_form(method))
+    throw Error("--methods: '" + name + "': -exact applies to aabb and the plain pie-slice methods");
+  return {method, split.exact, name};
 }
 
 // Trees by (mesh, method), so that a mesh shared by several cases (a sphere against each gap's

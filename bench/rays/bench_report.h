@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "boxtree/method.h"
+
 namespace boxtree::bench {
 
 using Clock = std::chrono::steady_clock;
@@ -29,6 +31,14 @@ inline ExactSuffix split_exact_suffix(const std::string& name) {
   if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
     return {name.substr(0, name.size() - suffix.size()), true};
   return {name, false};
+}
+
+// Whether AnyTree::build holds a packed form for `method` (plain aabb and plain pie slices, tight
+// or not; not their hybrids): the methods an `-exact` name applies to.
+inline bool has_packed_form(const Method& method) {
+  const bool pie = method.kind == VolumeKind::pie_max || method.kind == VolumeKind::pie_min ||
+                   method.kind == VolumeKind::pie_max_general || method.kind == VolumeKind::pie_min_general;
+  return method.kind == VolumeKind::aabb || (pie && method.hybrid_level == 0);
 }
 
 struct Row {
