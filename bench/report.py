@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Merges the bench programs' rows into bench/results.json and their markdown fragments into the
 generated blocks of bench/RESULTS.md (run by bench/run).
 

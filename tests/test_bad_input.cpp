@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bad input, end to end (issue 9): odd meshes must either give a correct tree, checked here for
 // every hierarchy method against brute force (rays, volume overlaps, planes, stabbing, tree vs
 // tree), or fail at loading or building with one clear line naming the problem. Files the

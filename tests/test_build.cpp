@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Builder: structural invariants on every kind of mesh, the O(log n) height, determinism, errors.
 #include <gtest/gtest.h>
 

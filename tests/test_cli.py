@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The `boxtree` command line's contract: subcommands, options, JSON keys, error behaviour.
 Usage: test_cli.py BOXTREE_BINARY SHARED_MESH_DIR SCRATCH_DIR
 Prints 'N passed, N failed' and exits non-zero on any failure."""

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tree vs tree against all-pairs brute force, under random rigid motions.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the per-facet narrowphase (contact.h).
 //
 // Analytic cases check exact normals, depths and positions; randomized cases check every routine

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // contact_triangle_faces: mesh-vs-mesh contacts along face normals (and make_torus, the mesh
 // its deep-overlap case is about).
 #include <gtest/gtest.h>

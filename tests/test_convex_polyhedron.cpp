@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Convex polyhedra (convex_polyhedron.h) and their separating-axis narrowphase
 // (contact_polyhedron_triangle in contact.h).
 //

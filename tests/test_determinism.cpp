@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Determinism (issue 9): the same mesh, method and settings give bit-identical trees (every
 // node's links and every corner of its volume, compared by their bits) and bit-identical query
 // answers, in one process and across processes (a child process of this test binary computes the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the fitting primitives (detail/fit.h) against independent references:
 //  * principal axes: point sets whose scatter matrix is known exactly (symmetric stars along a
 //    rotated frame), and degenerate sets (a point, a segment, a plane);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the exact leaf tests (geometry.h) and of the out-of-line box tests of volume/aabb.h.
 //
 // Every overlap test is checked against an independent reference on thousands of fixed-seed

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh loading, saving and validation (boxtree/io.h, boxtree/mesh.h).
 // Every format is checked on small files written here, facet by facet, so that facet order and
 // fan triangulation are pinned; errors are checked for the file name and the specific problem.

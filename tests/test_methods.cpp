@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every hierarchy method (the paper's six, the general-triangle pie slices, and the hybrids)
 // through the same checks: tree invariants, and every query and tree-vs-tree against brute force.
 // Brute force uses only the exact triangle tests, so "all methods give the same answer" follows.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The packed pie-slice tree (packed_prism_tree.h) against the exact Tree<PieSlice> it is packed
 // from and against brute force, for the four pie-slice kinds: a faithful packing (the same
 // hierarchy, every facet in one leaf, every decoded prism holding its exact prism), and the same

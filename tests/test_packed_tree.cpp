@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The packed axis-aligned tree (packed_tree.h) against the exact Tree<Aabb> it is packed from and
 // against brute force: a valid 4-wide packing, conservative boxes, the same query results.
 #include <gtest/gtest.h>

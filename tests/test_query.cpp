@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every single-tree query against brute force, on procedural and real meshes.
 #include <gtest/gtest.h>
 

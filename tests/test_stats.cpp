@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Statistics: per-level sums, and the meaning of plane_cost checked by Monte Carlo.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Threads (issue 9): a built tree is immutable and its queries are const (tree.h), so 8 threads
 // querying one shared tree must get exactly the single-threaded answers. Every query kind is run
 // (closest/any/all ray hits, ray candidates, overlap with each shape in both facet-test modes,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the oriented node volumes: oriented boxes (volume/obb.h, paper 3.2), pie slices
 // (volume/pie_slice.h, paper 3.3) and the convex-polytope separating-axis test between them
 // (volume/polytope.h). Suites: Volume* (fits, measures, queries), Sat* (separating axes).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Build time and memory (issue 7, section 4): boxtree's build_tree for each hierarchy method
 // against Bullet's quantized BVH, FCL's BVHModel (AABB, OBB, RSS, OBBRSS, kIOS) and Embree 3, on
 // fractal terrains of about 10k, 100k, 1M and 4M facets, single-threaded, in one process on the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Plots build_bench's CSV: build time and hierarchy bytes per facet against the facet count.
 
 usage: plot.py build_memory.csv OUT_DIR   (writes OUT_DIR/build_time.png, OUT_DIR/build_bytes.png)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bullet drop scene: N mixed bodies fall onto a meshed terrain; the same scene runs with
 // Bullet's btBvhTriangleMeshShape and with BoxtreeMeshShape (Bullet's convex-concave path fed by
 // processAllTriangles, and the boxtree collision algorithm), in one process, one after the other.

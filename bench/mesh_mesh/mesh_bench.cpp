@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Issue 7, section 2: mesh vs mesh. boxtree's tree-vs-tree collide (every --methods method)
 // against FCL 0.7 (BVHModel with AABB, OBB, RSS, OBBRSS, kIOS), Bullet GImpact and ODE's
 // trimesh-trimesh collider, in the same process on the same meshes and poses:

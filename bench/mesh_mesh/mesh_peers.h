@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Bullet GImpact and ODE's trimesh as mesh-vs-mesh peers (bench/mesh_mesh): the same two meshes
 // as boxtree's trees, b placed in a's frame by a rigid pose, a at the identity.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reproduces the paper's experiments (Section 4): Figures 3-4 (average area and volume of the
 // node volumes per level, for each method and model) and Table 1 (volume-volume tests of
 // tree-vs-tree collision for interleaved combs and concentric sphere pairs).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The paper's theory made executable (Sections 2, 3.1, 5): planar boxtrees on rectangular
 // partitions up to millions of cells, the terrain merge rule against the greedy builder on the
 // demo's terrain, and the stabbing number on the lower-bound constructions.

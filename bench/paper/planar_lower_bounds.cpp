@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The paper's Section 5 lower-bound constructions.
 //
 // The polytope's coordinates grow like 3^(4n): no floating type holds them exactly beyond

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The paper's Section 5 constructions (bench-only: the exact hull needs Boost.Multiprecision).
 #include <cstdint>

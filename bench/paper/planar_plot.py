@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plots of bench/paper/results/planar/*.csv (written by planar_bench): planar height and
 stabbing number against the paper's bounds, build and point-location time, and the stabbing
 number on Section 5's constructions beside random spheres and terrains."""

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plots the paper's Figures 3-4 (average area / volume of node volumes per level) and the
 Table 1 gap sweep from paper_bench's CSV output. Usage: plot.py RESULTS_DIR (Debian's
 python3-matplotlib; run with /usr/bin/python3)."""

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "peers/bullet_peer.h"
 
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Bullet's static-mesh midphase as a peer: btBvhTriangleMeshShape with quantized AABB
 // compression (Bullet's recommended setting for static meshes, 16-byte nodes), over a

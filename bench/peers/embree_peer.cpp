@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "peers/embree_peer.h"
 
 #include <algorithm>

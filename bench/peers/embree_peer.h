@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Embree 3 (Debian's libembree-dev) as a peer: one triangle geometry in a static scene, default
 // build quality (medium), built by a device created with "threads=1" so that builds and rays are

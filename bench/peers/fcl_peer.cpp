@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "peers/fcl_peer.h"
 
 #include <algorithm>

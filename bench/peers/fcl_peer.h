@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // FCL 0.7 (Debian's libfcl-dev) as a peer for mesh-vs-mesh collision: the same two meshes, the
 // same relative pose, exhaustive contact enumeration, and FCL's own counters.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Box-query benchmark (issue 10, "axis-aligned box queries on terrains"): the midphase alone,
 // as an engine calls it once per body and step, boxtree against Bullet's quantized BVH in one
 // process on the same boxes.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Result rows and the machine description shared by ray_bench and build_bench (issue 7,
 // sections 3-4). One row compares one boxtree figure with one peer's figure measured in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "ode_rays.h"
 
 #include <chrono>

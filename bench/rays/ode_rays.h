@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // ODE as a ray peer: a dGeomRay against a dTriMesh (ODE's OPCODE-based trimesh), one dCollide
 // per ray with closest-hit mode on (dGeomRaySetClosestHit), first-contact mode and back-face

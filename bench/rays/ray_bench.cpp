@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray benchmark (issue 7, section 3): closest-hit throughput of boxtree's ray_closest_hit for
 // several hierarchy methods against Bullet (btBvhTriangleMeshShape::performRaycast), Embree 3
 // (rtcIntersect1) and ODE (dGeomRay vs dTriMesh), all single-threaded, in one process on the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The models of the paper's experiments (Section 4, Figure 2), generated: random-point spheres
 // and concentric sphere pairs, interleaved combs, and rook- and banana-like stand-ins.

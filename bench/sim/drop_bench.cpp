@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The drop scene (the demo's: mixed bodies falling into a terrain bowl) in Bullet and ODE, with
 // each engine's built-in triangle-mesh midphase and with boxtree's, in one process on the same
 // scene (demos/src/scene.h, sim.h: the demo's own worlds, without rendering).

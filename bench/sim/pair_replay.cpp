@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The ODE drop scene's terrain pairs, replayed: the scene settles for some steps (OPCODE's
 // midphase), then both the built-in OPCODE world and boxtree's world are put at those very poses
 // and every terrain-body pair is collided again and again, without stepping. The same pairs at the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/active_edges.h"
 
 #include <algorithm>

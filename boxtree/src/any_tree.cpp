@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/any_tree.h"
 
 #include <algorithm>

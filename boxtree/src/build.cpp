@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bottom-up boxtree construction (paper, Sections 2-3).
 //
 // Round structure (m active nodes; each round orders them along the Morton curve of their box

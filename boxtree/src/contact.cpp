@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Per-facet narrowphase (contact.h): contact points between one triangle and a convex shape, and
 // between two triangles.
 //

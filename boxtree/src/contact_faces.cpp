@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // contact_triangle_faces (contact.h): mesh-vs-mesh contacts along face normals.
 #include <algorithm>
 #include <cmath>

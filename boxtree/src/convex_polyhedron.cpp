@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_convex_polyhedron: checks a face description of a convex hull and derives what the
 // separating-axis narrowphase needs (face planes, side planes, edges, edge directions).
 #include "boxtree/convex_polyhedron.h"

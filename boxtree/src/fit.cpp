@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fitting primitives (detail/fit.h): principal axes, 2D convex hull, minimum-area enclosing
 // rectangle, minimum-area enclosing triangle (general and isosceles).
 //

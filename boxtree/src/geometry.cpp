@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Leaf tests between one triangle and a query shape (geometry.h), and the out-of-line overlap
 // tests of volume/aabb.h.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Helpers shared by several source files of the library; not part of the public API.
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh files (contract in boxtree/io.h).
 //
 // OBJ goes through tinyobjloader's callback API, STL/PLY/OFF through Assimp. Both libraries are

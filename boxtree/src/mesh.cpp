@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Mesh validation and statistics (contracts in boxtree/mesh.h).
 #include "boxtree/mesh.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/method.h"
 
 #include <array>

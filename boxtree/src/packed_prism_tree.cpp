@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The packed pie-slice tree (packed_prism_tree.h): construction. The queries are the walks of
 // query.cpp and collide.cpp, run over this form through query_internal.h's PackedPrismView.
 //

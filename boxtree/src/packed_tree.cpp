@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/packed_tree.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Exact separating-axis test between two small convex polytopes (volume/polytope.h).
 //
 // Why the candidate axes suffice. P and Q are disjoint iff the origin is outside their Minkowski

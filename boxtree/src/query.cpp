@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/query.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Pieces shared by the query files (query.cpp, collide.cpp, packed_tree.cpp); not public API.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/stats.h"
 
 #include <sstream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Oriented boxes as node volumes (volume/obb.h; paper, Section 3.2): geometry, queries, fits.
 //
 // Conventions shared by every test here:

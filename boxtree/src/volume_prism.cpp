@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Pie slices (right triangular prisms) as node volumes (volume/pie_slice.h; paper, Section 3.3):
 // geometry, queries, fits. Conventions as in volume_obb.cpp: closed sets, conservative by a few
 // hundred ulps of the magnitudes involved, invalid query shapes overlap nothing.

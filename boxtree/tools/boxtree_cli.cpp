@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `boxtree`: inspect meshes and run queries from the command line. Subcommands, options and
 // JSON keys are a contract that scripts rely on (see README.md); add keys, never rename them.
 // Errors: one line on stderr starting with "boxtree: error:", exit code 1 (2 for usage errors).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // boxtree-demo: drops a few hundred mixed bodies onto a meshed terrain in Bullet or ODE, with
 // the engine's own triangle-mesh midphase or boxtree's, and renders PNG frames off-screen
 // (OSMesa). With --overlay-level it instead draws the hierarchy's volumes over the mesh.

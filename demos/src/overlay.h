@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The hierarchy overlay (after the paper's Plates 1 and 2): a mesh with the boxtree's volumes at
 // one level drawn over it, translucent faces with outlined edges.

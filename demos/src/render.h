@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Off-screen rendering with OSMesa (Mesa's llvmpipe; no display needed) in a compatibility
 // context with legacy fixed-function GL: enough for shaded meshes, lines and PNG frames.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The demo's scene, independent of the physics engine: a static terrain mesh and a list of
 // bodies (shape, size, start pose, colour). Bullet and ODE build their worlds from it, the

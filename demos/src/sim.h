@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // One physics world built from a Scene: Bullet or ODE, with the engine's own triangle-mesh
 // midphase or the boxtree adapter's. Both step with a fixed time step, single-threaded, so the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The scene in Bullet: the terrain as a static triangle-mesh shape, the bodies as Bullet's
 // convex primitives and, for the small meshes, dynamic triangle-mesh shapes.
 //   builtin: btBvhTriangleMeshShape (terrain) and btGImpactMeshShape (dynamic meshes; Bullet's

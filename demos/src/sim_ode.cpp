@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The scene in ODE: the terrain as a static triangle mesh, the bodies as ODE's primitives,
 // convexes and, for the small meshes, triangle meshes attached to bodies.
 //   builtin: dCreateTriMesh (OPCODE) for the terrain and the meshes.

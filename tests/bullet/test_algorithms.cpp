@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collision algorithms: bodies dropped on a terrain in two worlds (Bullet's own mesh shape,
 // and BoxtreeMeshShape with the convex-vs-boxtree algorithm), mesh vs mesh, internal edges.
 #include <gtest/gtest.h>

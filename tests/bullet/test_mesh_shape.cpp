@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // BoxtreeMeshShape against brute force and against btBvhTriangleMeshShape on the same mesh:
 // processAllTriangles sets, part ids, scaling, rays and convex sweeps through btCollisionWorld.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reliability of the Bullet adapter (issue 9): bad meshes given to BoxtreeMeshShape's constructors
 // are refused with one clear line (and the caller's arrays left alone); a terrain full of
 // duplicate, zero-area and sliver facets gives no NaN and lets no body through; the same scene

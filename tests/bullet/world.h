@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A small Bullet world for the adapter tests: the same scene can be built twice, once with
 // Bullet's own mesh shape and once with BoxtreeMeshShape, and stepped side by side.

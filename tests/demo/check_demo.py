@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Checks boxtree-demo headless runs (standard library only: PNGs are decoded with zlib).
 
   check_demo.py frames      DEMO ENGINE MIDPHASE DIR   one small run: frames written, not blank,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fuzz target: arbitrary floats as a mesh, built with every hierarchy method, queried against
 // brute force. Layout of the input: byte 0 picks the method, byte 1 the topology (bit 0: a strip,
 // facets (i, i+1, i+2), sharing edges; else separate triangles (3i, 3i+1, 3i+2)); then the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Shared by the fuzz targets: a failed check prints what failed and aborts, which libFuzzer
 // reports as a crash and saves the input.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fuzz target: load_mesh on arbitrary bytes. The first byte picks the format (.obj, .stl, .ply,
 // .off); the rest is the file. Either the load throws boxtree::Error with one line that starts
 // with the path, or it returns a mesh that validate_mesh accepts and whose tree validates.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fuzz target: the separating-axis overlap tests of the volume kinds against an exact reference.
 // Two shapes are decoded from the input, each an axis-aligned box, an oriented box whose axes are
 // a signed permutation, or a prism whose axis is a coordinate axis (a pie slice's volume), with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Replays the committed seed corpus through a fuzz target without libFuzzer, in the plain and
 // sanitizer test builds (ctest: fuzz_corpus_<target>). An input that once broke a target
 // (corpus/*/regress-*) thus fails every CI pass that breaks it again, not only the short fuzz

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The drop scene, built twice: a procedural terrain as ODE's own dTriMesh in one world and as the
 // boxtree geom in another, the same bodies dropped onto both. Shared by the scene tests and the

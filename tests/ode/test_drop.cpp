@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The drop scene in two worlds (terrain as ODE's dTriMesh, and as the boxtree geom): bodies of
 // every kind come to rest at the same heights, nothing falls through, and the contact counts and
 // collision times per step are printed side by side. Also closed meshes dropped as boxtree geoms.

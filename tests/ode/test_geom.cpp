@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The boxtree geom's contract with ODE: registration, AABB, the contact conventions of every
 // collider (checked against ODE's own trimesh on the same triangles where ODE has a collider),
 // the contact array protocol (max count, skip stride, CONTACTS_UNIMPORTANT), and rays.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test entry point. ODE's asserts are compiled into Debian's libode: its debug and error handlers
 // are replaced by ones that throw, so API misuse fails the test that made it (with ODE's message)
 // instead of aborting the whole suite. BOXTREE_ASSERT does the same. ODE is initialised once for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reliability of the ODE adapter (issue 9): bad input to dCreateBoxtreeMesh is refused with one
 // clear line before any ODE object is made; a terrain full of duplicate, zero-area and sliver
 // facets gives no NaN and lets no body through; the same scene stepped twice gives bit-identical

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <boxtree/build.h>
 #include <boxtree/generate.h>
 #include <boxtree/query.h>

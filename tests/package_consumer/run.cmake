@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Installs the build into a scratch prefix, then configures, builds and runs the consumer.
 file(REMOVE_RECURSE ${WORK_DIR})
 function(step)

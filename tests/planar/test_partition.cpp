@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Rectangular partitions: the generators make partitions, validation rejects overlaps and gaps.
 #include <gtest/gtest.h>
 

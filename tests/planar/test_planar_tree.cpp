@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The planar boxtree: the pairing's invariants (Theorem 2.2), the tree, point location against
 // brute force on every generator, and the stabbing number against brute force.
 #include <gtest/gtest.h>

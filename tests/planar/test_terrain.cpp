@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The terrain merge rule (paper, Section 3.1) as a build strategy: a valid tree whose queries
 // agree with brute force, for every volume kind; non-terrains are rejected.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Reference answers by exhaustive search: every facet, every node, every facet pair, through the
 // same exact per-triangle tests the tree uses, so any difference is the tree's fault.

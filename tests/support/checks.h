@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Query cross-checks against brute force, templated on the volume kind so that every method
 // (tests/test_methods.cpp) runs the same checks as the axis-aligned boxes (tests/test_query.cpp).

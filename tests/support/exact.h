@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Exact references for the geometry tests: rational arithmetic on __int128 and an exact LP
 // feasibility oracle ("do the convex hulls of two point sets intersect?"). Exact for the

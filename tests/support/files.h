@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Mesh files written by the tests: scratch folders under the build tree, little-endian encoders
 // for the binary formats, a binary STL writer, and the check that a load fails with a clear

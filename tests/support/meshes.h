@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Test meshes: procedural ones (always there) and the real ones in ../shared/meshes (tests that
 // need them skip with a message when the folder is absent).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A terrain with the oddities of real-world meshes added on top of a closed height field, for the
 // engines' robustness tests (tests/bullet, tests/ode): every fourth facet duplicated, zero-area

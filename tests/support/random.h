@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Random inputs for the randomized cross-checks (a fixed seed per test: failures reproduce).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test entry point: a failed BOXTREE_ASSERT throws, so a broken invariant fails the test that
 // triggered it instead of aborting the whole suite.
 #include <gtest/gtest.h>

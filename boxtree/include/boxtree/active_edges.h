@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Internal edges: a body sliding over a flat or concave part of a mesh must not bump on the
 // edges between facets. Per-facet contact routines (contact.h) see one triangle at a time, so a

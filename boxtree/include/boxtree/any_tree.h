@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A tree of any hierarchy method, chosen at run time: what the engine adapters (engine/) hold,
 // since a physics program picks its method from a setting, not a template argument. Inside, it

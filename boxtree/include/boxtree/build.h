@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Bottom-up construction (paper, Section 3): leaves are the facets; in each round a maximal set
 // of disjoint pairs of neighbouring nodes is merged, cheapest merged volume first, and unpaired

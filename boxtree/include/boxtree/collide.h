@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Tree vs tree: every pair of intersecting facets of two meshes under a relative rigid motion.
 #include <vector>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Per-facet narrowphase: contact points between one triangle and a convex shape, and between two
 // triangles. The boxtree queries (query.h, collide.h) find the candidate facets; these routines

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A convex polyhedron prepared for the separating-axis narrowphase (contact_polyhedron_triangle in
 // contact.h): its corners, face planes and face polygons, and its edges grouped by direction.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Errors. Two kinds, one policy each (see STYLE.md, "Errors"):
 //  * bad user input (files, meshes, options) -> boxtree::Error, thrown by loaders and builders,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Procedural meshes shared by the tests, the CLI's `generate`, the benchmarks and the demos.
 // All are deterministic functions of their arguments (own random-number mapping, so the same

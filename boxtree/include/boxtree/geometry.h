@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Exact-as-practical tests between one triangle and a query shape. These are the leaf tests of
 // every query and the reference that the brute-force cross-checks use; all are closed sets

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Mesh files. Formats by extension (case-insensitive): .obj (tinyobjloader), .stl (ASCII and
 // binary), .ply (ASCII and binary) and .off (Assimp). Facet order is the file's; polygons with

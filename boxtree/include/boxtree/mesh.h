@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // An indexed triangle mesh: the input a boxtree is built over.
 // Facet ids are indices into `triangles`, in the order of the source file (polygons are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Hierarchy methods by name: the one run-time switch at the edge (CLI, adapters). Inside the
 // library the volume kind is a template parameter; with_method turns a name into that type once.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The packed form of a pie-slice boxtree (Tree<PieMax>, Tree<PieMin>, Tree<PieMaxGeneral>,
 // Tree<PieMinGeneral>), what AnyTree holds for those methods: 48 bytes per facet where the exact

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The packed form of an axis-aligned boxtree, for the engines' hot paths (what AnyTree holds for
 // the `aabb` method): the hierarchy of a Tree<Aabb> with every two levels collapsed into one

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Queries on one tree: rays and segments, volume overlap (the midphase engines call), planes,
 // and point stabbing. All are plain functions over a const tree, safe to call from many threads

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Query shapes: small value types, no behaviour beyond construction. The tests between them
 // and triangles live in geometry.h; the tests between them and node volumes live beside each

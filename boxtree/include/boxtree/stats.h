@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Tree statistics (the paper's measures, Section 4) and a full structural check.
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The boxtree: a binary bounding-volume hierarchy whose leaves are in bijection with the facets
 // of a triangle mesh (paper, Section 1). Built by build_tree (build.h), read by the queries

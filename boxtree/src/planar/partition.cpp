@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Validation and generators of rectangular partitions (paper, Section 2).
 #include "boxtree/planar/partition.h"
 

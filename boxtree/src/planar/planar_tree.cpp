@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The planar boxtree (paper, Section 2): the pairing rounds of Theorem 2.2 with shortening,
 // the tree layout, point location and the stabbing number.
 #include "boxtree/planar/planar_tree.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The terrain merge rule (paper, Section 3.1) on top of the planar pairing (Section 2).
 #include "boxtree/planar/terrain.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/bullet/algorithms.h"
 
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>

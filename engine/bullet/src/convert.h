@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Bullet <-> boxtree value conversions (btScalar may be float or double; boxtree is double).
 #include <LinearMath/btTransform.h>

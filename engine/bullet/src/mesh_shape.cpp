@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "boxtree/bullet/mesh_shape.h"
 
 #include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>

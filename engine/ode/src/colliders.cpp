@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The colliders of the boxtree geom. ODE always calls them with the boxtree geom as o1 (it swaps
 // the arguments, negates the normals and swaps g1/g2 and side1/side2 itself for the reverse
 // order), so each one is written as "my mesh = g1".

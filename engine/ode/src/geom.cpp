@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The boxtree geom class: registration with ODE, creation, the world AABB, and the registries the
 // colliders read (convex points, trees of ODE trimeshes).
 #include <atomic>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Shared between geom.cpp (the class, creation, AABB, registries) and colliders.cpp.
 #include <atomic>

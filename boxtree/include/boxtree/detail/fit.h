@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Fitting primitives behind the oriented volumes' leaf and parent rules (paper, Sections
 // 3.2-3.3): principal axes of a point set, 2D convex hulls, and minimum-area enclosing

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A non-owning reference to a callable: what queries take as their visitor. One indirect call
 // per reported result (a hit, a facet, a pair), never per node; no allocation.

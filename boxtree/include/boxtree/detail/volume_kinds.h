@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Every volume kind the library is compiled for: each src/*.cpp instantiates its templates for
 // this list, so adding a kind is one line here (plus its name in method.h).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Rectangular partitions: validation and generators (paper, Section 2: "n axis-parallel
 // rectangles that partition the unit square"). All generators are deterministic functions of

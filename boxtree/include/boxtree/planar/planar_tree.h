@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The planar boxtree of a rectilinear subdivision (paper, Section 2, Theorem 2.2), built
 // bottom-up by the segment-graph pairing rule, and point location through it.

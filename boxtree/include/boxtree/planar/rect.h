@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Axis-parallel rectangles in the plane: the boxes of the paper's Section 2.
 // A rectangle is closed ([min, max] on each axis); a partition's cells are compared by their

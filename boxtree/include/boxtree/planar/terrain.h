@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The terrain merge rule (paper, Section 3.1): for a terrain whose facets' vertical projections
 // fall into rectangular cells that tile the plane (a grid terrain such as make_terrain: the two

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Axis-aligned box: the paper's Section 3.1 volume and the first volume kind of the library.
 // Every volume kind offers the same set of operations (see volume/volume.h for the list and the

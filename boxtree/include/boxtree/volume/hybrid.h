@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The paper's hybrids (Section 4): a method's volumes in the lower levels of the tree and
 // axis-aligned boxes from a chosen level up ("pie-min+aabb@L": levels >= L are boxes; level =

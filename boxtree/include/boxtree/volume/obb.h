@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Oriented boxes as node volumes (paper, Section 3.2). The geometry lives in `Obb` (shapes.h,
 // also a query shape); the three parent rules are three volume types, OrientedBox<axis>:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Pie slices as node volumes (paper, Section 3.3): a triangle swept along a segment normal to
 // it, i.e. a right triangular prism. Parent rule: the max or min principal component of the 12

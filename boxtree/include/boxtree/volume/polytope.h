@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A small convex polytope description shared by every volume kind, for exact separating-axis
 // tests between any two kinds (boxes, oriented boxes, prisms, mixed) in one place.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // The operations every volume kind provides, and a compile-time check of them. The builder,
 // the queries and the statistics use nothing else, so a new kind (oriented boxes, pie slices)

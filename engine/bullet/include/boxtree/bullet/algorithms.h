@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // Collision algorithms for BoxtreeMeshShape, registered with a btCollisionDispatcher:
 //  - convex body vs boxtree mesh: queries the tree with the body's tight volume (sphere, oriented

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // BoxtreeMeshShape: a static (or kinematic, or dynamic) triangle-mesh shape for Bullet whose
 // midphase is a boxtree. Drop-in where a program uses btBvhTriangleMeshShape:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #pragma once
 // A custom ODE geom class backed by a boxtree: a drop-in replacement for dCreateTriMesh.
 //
