@@ -65,7 +65,8 @@ TEST(Collide, SelfContactIsExact) {
   const Tree<Aabb> tree = build_tree<Aabb>(mesh);
   const std::vector<FacetPair> got = collide(tree, tree, RigidTransform::identity());
   EXPECT_EQ(got, test::brute_collide(mesh, mesh, RigidTransform::identity()));
-  for (FacetId f = 0; f < mesh.facet_count(); ++f) EXPECT_TRUE(std::binary_search(got.begin(), got.end(), FacetPair{f, f}));
+  for (FacetId f = 0; f < mesh.facet_count(); ++f)
+    EXPECT_TRUE(std::binary_search(got.begin(), got.end(), FacetPair{f, f}));
 }
 
 TEST(Collide, ConcentricSpheresNoPairs) {
@@ -81,7 +82,8 @@ TEST(Collide, MatchesBruteForceOnRealMeshes) {
   std::size_t pairs = 0;
   check_pair(test::load_shared_mesh("env.obj"), test::load_shared_mesh("rob.obj"), 12, 1500, "env vs rob", &pairs);
   EXPECT_GT(pairs, 0u);
-  check_pair(test::load_shared_mesh("ode_bunny.obj"), test::load_shared_mesh("ode_bunny.obj"), 8, 0.5, "bunny vs bunny", &pairs);
+  check_pair(test::load_shared_mesh("ode_bunny.obj"), test::load_shared_mesh("ode_bunny.obj"), 8, 0.5, "bunny vs bunny",
+             &pairs);
   EXPECT_GT(pairs, 0u);
 }
 

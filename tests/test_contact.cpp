@@ -410,8 +410,8 @@ TEST(ContactConvex, HullOfACubeAgreesWithTheBoxRoutine) {
   int not_least = 0;
   for (int trial = 0; trial < scaled(300); ++trial) {
     const std::array<Vec3, 3> t = {rng.point(-2, 2), rng.point(-2, 2), rng.point(-2, 2)};
-    const Obb box = make_box(rng.near(t, 0.8), rng.rotation(), Vec3(rng.uniform(0.2, 0.6), rng.uniform(0.2, 0.6),
-                                                                    rng.uniform(0.2, 0.6)));
+    const Obb box = make_box(rng.near(t, 0.8), rng.rotation(),
+                             Vec3(rng.uniform(0.2, 0.6), rng.uniform(0.2, 0.6), rng.uniform(0.2, 0.6)));
     std::vector<Vec3> corners;
     for (int i = 0; i < 8; ++i) {
       Vec3 s;
@@ -484,9 +484,9 @@ TEST(ContactTriangleTriangle, AnalyticCases) {
 
 TEST(ContactDegenerate, SegmentsAndPointsGiveFiniteAnswers) {
   const std::array<std::array<Vec3, 3>, 4> triangles = {{
-      {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0, 0)},  // collinear
-      {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 0, 0)},  // repeated corner
-      {Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0)},  // a point
+      {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0, 0)},      // collinear
+      {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 0, 0)},      // repeated corner
+      {Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0)},      // a point
       {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 1e-12, 0)},  // a needle
   }};
   ContactOptions options;
@@ -920,7 +920,8 @@ TEST(ContactRandom, ConvexCapsuleAgainstExactOverlap) {
     ContactPoint c[kMaxConvexTriangleContacts];
     const int n = contact_convex_triangle({support, mid}, t[0], t[1], t[2], options, c);
     const std::string what = "convex #" + std::to_string(trial) + " " + str(cap.p0) + " " + str(cap.p1) + " r " +
-                             std::to_string(cap.radius) + " margin " + std::to_string(options.margin) + " tri " + str(t[0]) + str(t[1]) + str(t[2]) + " normal " +
+                             std::to_string(cap.radius) + " margin " + std::to_string(options.margin) + " tri " +
+                             str(t[0]) + str(t[1]) + str(t[2]) + " normal " +
                              (n ? str(c[0].normal) + " depth " + std::to_string(c[0].depth) : "");
     const auto overlaps = [&](const Vec3& offset, Real grow) {
       return triangle_overlaps_capsule(t[0], t[1], t[2],
@@ -987,8 +988,8 @@ TEST(ContactRandom, CylinderAgreesWithTheGeneralRoutine) {
     const auto support = [&](const Vec3& d) { return support_cylinder(p0, p1, radius, d); };
     const int m = contact_convex_triangle({support, mid}, t[0], t[1], t[2], options, g);
     const std::string what = "cylinder #" + std::to_string(trial) + " " + str(p0) + " " + str(p1) + " r,margin " +
-                             str(Vec3(radius, options.margin, 0)) +
-                             (options.two_sided ? "" : " one-sided") + " tri " + str(t[0]) + str(t[1]) + str(t[2]);
+                             str(Vec3(radius, options.margin, 0)) + (options.two_sided ? "" : " one-sided") + " tri " +
+                             str(t[0]) + str(t[1]) + str(t[2]);
     if (n == 0) {
       if (m > 0) {
         ASSERT_LT(g[0].depth, -options.margin + kConvexAccuracy) << what;
@@ -1006,8 +1007,8 @@ TEST(ContactRandom, CylinderAgreesWithTheGeneralRoutine) {
     // (pushed out of a one-sided triangle, the depth is the least lift instead: it may be less).
     const Vec3 u = c[0].normal;
     const Vec3 w = (p1 - p0).normalized();
-    const Real lowest = u.dot(mid) - half.norm() * std::abs(u.dot(w)) -
-                        radius * std::sqrt(std::max(Real(0), 1 - u.dot(w) * u.dot(w)));
+    const Real lowest =
+        u.dot(mid) - half.norm() * std::abs(u.dot(w)) - radius * std::sqrt(std::max(Real(0), 1 - u.dot(w) * u.dot(w)));
     const Real top = std::max({u.dot(t[0]), u.dot(t[1]), u.dot(t[2])});
     if (options.two_sided) {
       // On a degenerate triangle (a segment) the polished axis is good to ~1e-8 (seen: 9.2e-9).
@@ -1124,8 +1125,8 @@ TEST(ContactCylinder, RimOnAnEdgeIsTheExactMinimumAcrossTheEdge) {
       ASSERT_EQ(contact_cylinder_triangle(p0, p1, 0.5, a, b, c, options, got), 1) << z;
       const auto support = [&](const Vec3& d) { return support_cylinder(p0, p1, 0.5, d); };
       ASSERT_EQ(contact_convex_triangle({support, mid}, a, b, c, options, general), 1) << z;
-      EXPECT_NEAR(got[0].normal.x(), 0, 1e-12) << z;   // across the edge (along x)
-      EXPECT_LT(got[0].normal.z(), 0.8) << z;          // not the face's normal
+      EXPECT_NEAR(got[0].normal.x(), 0, 1e-12) << z;  // across the edge (along x)
+      EXPECT_LT(got[0].normal.z(), 0.8) << z;         // not the face's normal
       EXPECT_LE(got[0].depth, general[0].depth + 1e-9) << z;
       EXPECT_GT(got[0].depth, general[0].depth - 1e-6) << z;
     }
@@ -1144,7 +1145,8 @@ TEST(ContactCylinder, LyingAndStandingGiveAPatch) {
   }
   EXPECT_NEAR(std::abs(c[0].position.x() - c[1].position.x()), 2, 1e-9);
   // Standing on its lower disk, 0.1 deep: rim points.
-  n = contact_cylinder_triangle({0.2, 0.1, -0.1}, {0.2, 0.1, 1.9}, 0.5, kBigFloor[0], kBigFloor[1], kBigFloor[2], {}, c);
+  n = contact_cylinder_triangle({0.2, 0.1, -0.1}, {0.2, 0.1, 1.9}, 0.5, kBigFloor[0], kBigFloor[1], kBigFloor[2], {},
+                                c);
   ASSERT_EQ(n, kMaxCylinderTriangleContacts);
   int on_rim = 0;
   for (int i = 0; i < n; ++i) {
@@ -1155,7 +1157,8 @@ TEST(ContactCylinder, LyingAndStandingGiveAPatch) {
   }
   EXPECT_GE(on_rim, 3);
   // Apart by 0.1: nothing, unless within the margin.
-  EXPECT_EQ(contact_cylinder_triangle({-1, 0, 0.6}, {1, 0, 0.6}, 0.5, kBigFloor[0], kBigFloor[1], kBigFloor[2], {}, c), 0);
+  EXPECT_EQ(contact_cylinder_triangle({-1, 0, 0.6}, {1, 0, 0.6}, 0.5, kBigFloor[0], kBigFloor[1], kBigFloor[2], {}, c),
+            0);
   ContactOptions options;
   options.margin = 0.2;
   n = contact_cylinder_triangle({-1, 0, 0.6}, {1, 0, 0.6}, 0.5, kBigFloor[0], kBigFloor[1], kBigFloor[2], options, c);

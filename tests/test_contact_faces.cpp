@@ -41,7 +41,8 @@ TEST(ContactFaces, CubeSinkingIntoAGridIsPushedUpNotSideways) {
   const Mat3 r = Eigen::AngleAxis<Real>(0.3, Vec3::UnitZ()).toRotationMatrix();
   const Vec3 center(3.2, 3.1, 0.45);
   // The cube's 12 facets, wound outward.
-  const Vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+  const Vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                     {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
   const int faces[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
                             {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
   auto corner = [&](int i) { return Vec3(center + r * (c[i] * 0.5)); };
@@ -71,8 +72,8 @@ TEST(ContactFaces, CubeSinkingIntoAGridIsPushedUpNotSideways) {
 // depth x normal over the contacts of every intersecting facet pair, as a force on the torus.
 // `torus_is_a`: the torus is triangle a (normals point towards it) or b (they point away).
 Vec3 push_on_sunk_torus(bool torus_is_a, FixedSurface fixed, int* same_facing_pairs) {
-  const TriangleMesh floor = make_terrain(24, 24, 1, 1.2, 0);  // 5 cm cells, z = 0
-  TriangleMesh torus = make_torus(0.21, 0.09, 18, 8);           // 8 cm facets: twice a cell's area
+  const TriangleMesh floor = make_terrain(24, 24, 1, 1.2, 0);       // 5 cm cells, z = 0
+  TriangleMesh torus = make_torus(0.21, 0.09, 18, 8);               // 8 cm facets: twice a cell's area
   for (Vec3& v : torus.vertices) v += Vec3(0.6, 0.6, 0.09 - 0.12);  // tube 0.18 thick, 0.12 under
   Vec3 push = Vec3::Zero();
   *same_facing_pairs = 0;
@@ -106,7 +107,8 @@ TEST(ContactFaces, DeepOverlapIsResolvedThroughTheFixedSurface) {
     EXPECT_GT(fixed.z(), 0);
     // Only same-facing pairs change: with the torus fixed instead (a static torus, a moving floor)
     // the floor is pushed the other way round, down, out of the torus's tube past its middle.
-    const Vec3 torus_fixed = push_on_sunk_torus(torus_is_a, torus_is_a ? FixedSurface::a : FixedSurface::b, &same_facing);
+    const Vec3 torus_fixed =
+        push_on_sunk_torus(torus_is_a, torus_is_a ? FixedSurface::a : FixedSurface::b, &same_facing);
     EXPECT_LT(torus_fixed.z(), 0);
   }
 }

@@ -87,7 +87,8 @@ Real largest_gap(const std::vector<Vec3>& points, const std::vector<std::vector<
   };
   along((t[1] - t[0]).cross(t[2] - t[0]));
   for (const auto& f : faces) {
-    along((points[std::size_t(f[1])] - points[std::size_t(f[0])]).cross(points[std::size_t(f[2])] - points[std::size_t(f[0])]));
+    along((points[std::size_t(f[1])] - points[std::size_t(f[0])])
+              .cross(points[std::size_t(f[2])] - points[std::size_t(f[0])]));
   }
   for (std::size_t i = 0; i < points.size(); ++i)
     for (std::size_t k = i + 1; k < points.size(); ++k)
@@ -119,7 +120,7 @@ TEST(ConvexPolyhedron, CubeFromQuads) {
   for (int f = 0; f < cube.face_count(); ++f) {
     const Plane& face = cube.faces[std::size_t(f)];
     EXPECT_NEAR(face.normal.norm(), 1, 1e-15);
-    EXPECT_NEAR(face.offset, 1, 1e-15);            // unit distance, outward
+    EXPECT_NEAR(face.offset, 1, 1e-15);                   // unit distance, outward
     EXPECT_NEAR(face.normal.cwiseAbs().sum(), 1, 1e-15);  // an axis
     // The face's corners are on it and inside all of its sides; its centre too, strictly.
     Vec3 centre = Vec3::Zero();
@@ -277,16 +278,14 @@ TEST(ContactPolyhedron, CubeAgreesWithTheBoxRoutine) {
   EXPECT_LE(differ, contacts / 15);
 }
 
-// Random hulls (5 to 16 points on an ellipsoid, or oblique prisms) against an exact brute-force separating-axis reference
-// (largest_gap above, over every point pair's direction, independent of the routine's edge and
-// face tables): (1) a contact iff they overlap, outside a thin band around touching; (2) moving the
-// hull by normal * (depth + eps) separates it; (3) two-sided, by depth - eps it still overlaps (the
-// depth is the penetration along the normal, not more); (4) positions on the triangle, deepest
-// points in the hull. And the depth against GJK/EPA on the same points (libccd, another
-// algorithm): EPA's least penetration within 5% (the face bias, as for boxes) in all but a few
-// cases, those where a two-sided triangle's normal is taken on the side of the hull's centre (the
-// documented rule) while the least penetration is through the other side, or where EPA ends in a
-// shallower basin.
+// Random hulls (5 to 16 points on an ellipsoid, or oblique prisms) against an exact brute-force separating-axis
+// reference (largest_gap above, over every point pair's direction, independent of the routine's edge and face tables):
+// (1) a contact iff they overlap, outside a thin band around touching; (2) moving the hull by normal * (depth + eps)
+// separates it; (3) two-sided, by depth - eps it still overlaps (the depth is the penetration along the normal, not
+// more); (4) positions on the triangle, deepest points in the hull. And the depth against GJK/EPA on the same points
+// (libccd, another algorithm): EPA's least penetration within 5% (the face bias, as for boxes) in all but a few cases,
+// those where a two-sided triangle's normal is taken on the side of the hull's centre (the documented rule) while the
+// least penetration is through the other side, or where EPA ends in a shallower basin.
 TEST(ContactPolyhedron, RandomHullsAgainstBruteForceAndGjkEpa) {
   test::Random rng(43);
   int overlapping = 0;
@@ -312,8 +311,10 @@ TEST(ContactPolyhedron, RandomHullsAgainstBruteForceAndGjkEpa) {
       std::sort(angles.begin(), angles.end());
       const Vec3 sweep = turn * Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(0.1, 0.8));
       for (int i = 0; i < count; ++i)
-        points.push_back(centre + turn * Vec3(stretch.x() * std::cos(angles[std::size_t(i)]),
-                                              stretch.y() * std::sin(angles[std::size_t(i)]), 0) - sweep / 2);
+        points.push_back(centre +
+                         turn * Vec3(stretch.x() * std::cos(angles[std::size_t(i)]),
+                                     stretch.y() * std::sin(angles[std::size_t(i)]), 0) -
+                         sweep / 2);
       for (int i = 0; i < count; ++i) points.push_back(points[std::size_t(i)] + sweep);
       std::vector<int> bottom, top;
       for (int i = 0; i < count; ++i) {

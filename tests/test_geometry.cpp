@@ -49,7 +49,6 @@ std::string str(const Vec3& v) {
 // ------------------------------------------------------------------------------------------
 // Random data
 
-
 // A triangle with small grid coordinates, degenerate (coincident or collinear corners) with
 // probability `degenerate`.
 std::array<Vec3, 3> grid_triangle(Random& rng, int lo, int hi, int denominator, Real degenerate) {
@@ -57,16 +56,24 @@ std::array<Vec3, 3> grid_triangle(Random& rng, int lo, int hi, int denominator, 
                            rng.grid_point(lo, hi, denominator)};
   if (rng.chance(degenerate)) {
     switch (rng.integer(0, 3)) {
-      case 0: t[2] = t[0]; break;                                   // two corners coincide
-      case 1: t[1] = t[0]; t[2] = t[0]; break;                      // a point
-      case 2: t[2] = t[0] + Real(2) * (t[1] - t[0]); break;         // collinear, c beyond b
-      default: t[2] = t[0] + Real(0.5) * (t[1] - t[0]); break;      // collinear, c between
+      case 0:
+        t[2] = t[0];
+        break;  // two corners coincide
+      case 1:
+        t[1] = t[0];
+        t[2] = t[0];
+        break;  // a point
+      case 2:
+        t[2] = t[0] + Real(2) * (t[1] - t[0]);
+        break;  // collinear, c beyond b
+      default:
+        t[2] = t[0] + Real(0.5) * (t[1] - t[0]);
+        break;  // collinear, c between
     }
     std::shuffle(t.begin(), t.end(), rng.engine);
   }
   return t;
 }
-
 
 std::vector<RPoint> exact_points(std::initializer_list<Vec3> points) {
   std::vector<RPoint> r;
@@ -348,7 +355,9 @@ Mesh icosahedron() {
     }
   }
   const int n = static_cast<int>(m.vertices.size());
-  const auto adjacent = [&](int i, int j) { return std::abs((m.vertices[i] - m.vertices[j]).squaredNorm() - 4) < 1e-9; };
+  const auto adjacent = [&](int i, int j) {
+    return std::abs((m.vertices[i] - m.vertices[j]).squaredNorm() - 4) < 1e-9;
+  };
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
       for (int k = j + 1; k < n; ++k) {
@@ -411,8 +420,8 @@ void check_closed(const Mesh& m) {
 
 // A ray through a point of a shared edge or vertex where the surface is crossed (not grazed)
 // must hit at least one of the facets around it: the watertightness of Woop et al.
-void check_watertight_from(const Mesh& m, Random& rng, const Vec3& origin_center, Real origin_radius, bool origin_inside,
-                           int rays, int& checked) {
+void check_watertight_from(const Mesh& m, Random& rng, const Vec3& origin_center, Real origin_radius,
+                           bool origin_inside, int rays, int& checked) {
   const auto edges = m.edge_faces();
   std::vector<std::pair<int, int>> edge_list;
   for (const auto& e : edges) edge_list.push_back(e.first);
@@ -613,8 +622,9 @@ TEST(GeometryTriangleAabb, AnalyticCases) {
   const Aabb box{Vec3(0, 0, 0), Vec3(1, 1, 1)};
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(0.2, 0.2, 0.2), Vec3(0.3, 0.2, 0.2), Vec3(0.2, 0.3, 0.2), box));  // inside
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(-5, -5, 0.5), Vec3(5, -5, 0.5), Vec3(0, 10, 0.5), box));  // box inside
-  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(1, 1, 1), Vec3(2, 1, 1), Vec3(1, 2, 3), box));  // corner touch
-  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2), Aabb{Vec3(-1, -1, -1), Vec3(1, 1, 1)}));
+  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(1, 1, 1), Vec3(2, 1, 1), Vec3(1, 2, 3), box));            // corner touch
+  EXPECT_TRUE(
+      triangle_overlaps_aabb(Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2), Aabb{Vec3(-1, -1, -1), Vec3(1, 1, 1)}));
   // Plane x + y + z = 3.5 misses the unit box's far corner (sum 3): only the normal axis tells.
   EXPECT_FALSE(triangle_overlaps_aabb(Vec3(3.5, 0, 0), Vec3(0, 3.5, 0), Vec3(0, 0, 3.5), box));
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, 3), box));
@@ -624,11 +634,13 @@ TEST(GeometryTriangleAabb, AnalyticCases) {
   // Degenerate triangles: a segment through the box, a segment passing by, a point on a face.
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(-1, 0.5, 0.5), Vec3(2, 0.5, 0.5), Vec3(0.5, 0.5, 0.5), box));
   EXPECT_FALSE(triangle_overlaps_aabb(Vec3(-1, 1.5, 0.5), Vec3(1, 3.5, 0.5), Vec3(1, 3.5, 0.5), box));
-  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(-1, 1, 0.5), Vec3(1, 3, 0.5), Vec3(1, 3, 0.5), Aabb{Vec3(0, 0, 0), Vec3(1, 2, 1)}));
+  EXPECT_TRUE(
+      triangle_overlaps_aabb(Vec3(-1, 1, 0.5), Vec3(1, 3, 0.5), Vec3(1, 3, 0.5), Aabb{Vec3(0, 0, 0), Vec3(1, 2, 1)}));
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(1, 0.5, 0.5), Vec3(1, 0.5, 0.5), Vec3(1, 0.5, 0.5), box));
   EXPECT_FALSE(triangle_overlaps_aabb(Vec3(1.5, 0.5, 0.5), Vec3(1.5, 0.5, 0.5), Vec3(1.5, 0.5, 0.5), box));
   // Flat box (a square) and empty box.
-  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(0.6, 0.5, 1), Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}));
+  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(0.6, 0.5, 1),
+                                     Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}));
   EXPECT_FALSE(triangle_overlaps_aabb(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Aabb::empty()));
 }
 
@@ -665,8 +677,8 @@ TEST(GeometryTriangleObb, MatchesExactReferenceForAxisPermutations) {
     box.center = rng.grid_point(-2, 2, 2);
     box.axes = to_double(r);
     for (int k = 0; k < 3; ++k) box.half_extents[k] = rng.chance(0.2) ? 0 : rng.grid(0, 2, 2);
-    const bool expected = hulls_intersect(exact_points({t[0], t[1], t[2]}),
-                                          box_corners(exact(box.center), r, exact(box.half_extents)));
+    const bool expected =
+        hulls_intersect(exact_points({t[0], t[1], t[2]}), box_corners(exact(box.center), r, exact(box.half_extents)));
     (expected ? positives : negatives) += 1;
     if (triangle_overlaps_obb(t[0], t[1], t[2], box) != expected && failures++ < 5) {
       ADD_FAILURE() << "expected " << expected << " at case " << i;
@@ -832,16 +844,16 @@ TEST(GeometrySphere, TouchingCountsAndSeparatedDoesNot) {
 
 TEST(GeometrySegmentDistance, AnalyticCases) {
   const Vec3 o(0, 0, 0), x(2, 0, 0);
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, -1, 1), Vec3(1, 1, 1)), 1);     // crossing above
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, -1, 0), Vec3(1, 1, 0)), 0);     // crossing
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(3, 0, 0), Vec3(5, 0, 0)), 1);      // collinear, apart
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, 0, 0), Vec3(5, 0, 0)), 0);      // collinear, overlap
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(-1, 2, 0), Vec3(5, 2, 0)), 4);     // parallel
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(3, 3, 0), Vec3(5, 3, 0)), 10);     // parallel, apart
-  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, 3, 0), Vec3(1, 3, 0)), 9);      // zero length
-  EXPECT_EQ(segment_segment_distance_squared(o, o, Vec3(1, 3, 0), Vec3(1, 3, 0)), 10);     // both
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, -1, 1), Vec3(1, 1, 1)), 1);  // crossing above
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, -1, 0), Vec3(1, 1, 0)), 0);  // crossing
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(3, 0, 0), Vec3(5, 0, 0)), 1);   // collinear, apart
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, 0, 0), Vec3(5, 0, 0)), 0);   // collinear, overlap
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(-1, 2, 0), Vec3(5, 2, 0)), 4);  // parallel
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(3, 3, 0), Vec3(5, 3, 0)), 10);  // parallel, apart
+  EXPECT_EQ(segment_segment_distance_squared(o, x, Vec3(1, 3, 0), Vec3(1, 3, 0)), 9);   // zero length
+  EXPECT_EQ(segment_segment_distance_squared(o, o, Vec3(1, 3, 0), Vec3(1, 3, 0)), 10);  // both
   EXPECT_EQ(segment_segment_distance_squared(Vec3(3, 1, 0), Vec3(3, 1, 0), o, x), 2);
-  EXPECT_EQ(segment_segment_distance_squared(x, o, Vec3(4, 0, 0), Vec3(4, 1, 0)), 4);      // end to end
+  EXPECT_EQ(segment_segment_distance_squared(x, o, Vec3(4, 0, 0), Vec3(4, 1, 0)), 4);  // end to end
   // Nearly parallel segments crossing at x = 1: the cross-product form keeps this exact-ish.
   EXPECT_LT(segment_segment_distance_squared(o, x, Vec3(0, -1e-9, 0), Vec3(2, 1e-9, 0)), 1e-30);
   EXPECT_NEAR(segment_segment_distance_squared(o, x, Vec3(0, -1e-9, 1e-6), Vec3(2, 1e-9, 1e-6)), 1e-12, 1e-20);
@@ -853,7 +865,8 @@ TEST(GeometrySegmentDistance, MatchesSamplingOnRandomSegments) {
   for (int i = 0; i < scaled(400); ++i) {
     const Vec3 p0 = rng.point(-2, 2);
     const Vec3 p1 = rng.chance(0.1) ? p0 : rng.point(-2, 2);  // zero length sometimes
-    const Vec3 q0 = rng.chance(0.1) ? Vec3(p0 + rng.uniform(-1, 2) * (p1 - p0)) : rng.point(-2, 2);  // collinear sometimes
+    const Vec3 q0 =
+        rng.chance(0.1) ? Vec3(p0 + rng.uniform(-1, 2) * (p1 - p0)) : rng.point(-2, 2);  // collinear sometimes
     Vec3 q1 = rng.chance(0.1) ? q0 : rng.point(-2, 2);
     if (rng.chance(0.3)) q1 = q0 + rng.uniform(-2, 2) * (p1 - p0);  // parallel
     Real sampled = kInf;
@@ -907,8 +920,8 @@ TEST(GeometrySegmentTriangleDistance, MatchesSamplingAndDrivesCapsuleTest) {
       const Vec3 ps = p0 + (Real(s) / (kSegmentSamples - 1)) * (p1 - p0);
       for (const Vec3& q : tri_samples) sampled = std::min(sampled, (ps - q).norm());
     }
-    const Real spacing = longest_edge(t[0], t[1], t[2]) / kTriangleSubdivisions +
-                         0.5 * (p1 - p0).norm() / (kSegmentSamples - 1);
+    const Real spacing =
+        longest_edge(t[0], t[1], t[2]) / kTriangleSubdivisions + 0.5 * (p1 - p0).norm() / (kSegmentSamples - 1);
     const Real got = std::sqrt(segment_triangle_distance_squared(p0, p1, t[0], t[1], t[2]));
     ASSERT_LE(got, sampled + 1e-12) << i;
     ASSERT_GE(got, sampled - spacing - 1e-12) << i;
@@ -967,7 +980,7 @@ TEST(GeometryBoxBox, AnalyticCases) {
   RigidTransform a_from_b;
   a_from_b.rotation << 0, -1, 0, 1, 0, 0, 0, 0, 1;  // x_a = -y_b + 3, y_a = x_b
   a_from_b.translation = Vec3(3, 0, 0);
-  EXPECT_TRUE(overlaps(unit, Aabb{Vec3(-1, 1, -1), Vec3(1, 2, 1)}, a_from_b));  // x_a in [1, 2]
+  EXPECT_TRUE(overlaps(unit, Aabb{Vec3(-1, 1, -1), Vec3(1, 2, 1)}, a_from_b));       // x_a in [1, 2]
   EXPECT_FALSE(overlaps(unit, Aabb{Vec3(-1, 0.5, -1), Vec3(1, 1.9, 1)}, a_from_b));  // x_a in [1.1, 2.5]
   EXPECT_TRUE(overlaps(Aabb{Vec3(-1, 1, -1), Vec3(1, 2, 1)}, unit, a_from_b.inverse()));
 }
@@ -1043,7 +1056,8 @@ TEST(GeometryBoxBox, MatchesExactReferenceForRationalRotationsOutsideBand) {
       can_shrink = can_shrink && shrunk[k].sign() >= 0;
     }
     const bool outer = hulls_intersect(corners_of(pair.a), box_corners(pair.b_center, pair.b_axes, grown));
-    const bool inner = can_shrink && hulls_intersect(corners_of(pair.a), box_corners(pair.b_center, pair.b_axes, shrunk));
+    const bool inner =
+        can_shrink && hulls_intersect(corners_of(pair.a), box_corners(pair.b_center, pair.b_axes, shrunk));
     if (outer && !inner) continue;
     ++asserted;
     for (bool got : box_answers(pair, rng)) {
@@ -1077,7 +1091,7 @@ TEST(GeometryBoxBox, RandomRotationsNeverMissAContainedCorner) {
     const Vec3 h = rng.point(0, 1).cwiseProduct(Vec3(rng.chance(0.3) ? 0 : 1, 1, rng.chance(0.3) ? 0 : 1));
     const Vec3 corner_sign(rng.chance(0.5) ? 1 : -1, rng.chance(0.5) ? 1 : -1, rng.chance(0.5) ? 1 : -1);
     const Vec3 corner = rng.point(-1.9, 1.9).cwiseMax(a.min).cwiseMin(a.max);  // a point of a
-    const Vec3 center = corner - r * h.cwiseProduct(corner_sign);               // b's corner there
+    const Vec3 center = corner - r * h.cwiseProduct(corner_sign);              // b's corner there
     ASSERT_TRUE(overlaps(a, Obb{center, r, h})) << i;
     const Aabb b{-h, h};
     ASSERT_TRUE(overlaps(a, b, RigidTransform{r, center})) << i;
@@ -1090,9 +1104,9 @@ TEST(GeometryBoxBox, RandomRotationsNeverMissAContainedCorner) {
 
 TEST(GeometryAabbCapsule, AnalyticCases) {
   const Aabb box{Vec3(0, 0, 0), Vec3(10, 10, 10)};
-  EXPECT_TRUE(overlaps(box, Capsule{Vec3(5, 5, 5), Vec3(6, 6, 6), 0}));                 // inside
-  EXPECT_TRUE(overlaps(box, Capsule{Vec3(-5, 5, 5), Vec3(15, 5, 5), 0}));               // through
-  EXPECT_TRUE(overlaps(box, Capsule{Vec3(12, 5, 5), Vec3(20, 5, 5), 2}));               // end touches a face
+  EXPECT_TRUE(overlaps(box, Capsule{Vec3(5, 5, 5), Vec3(6, 6, 6), 0}));    // inside
+  EXPECT_TRUE(overlaps(box, Capsule{Vec3(-5, 5, 5), Vec3(15, 5, 5), 0}));  // through
+  EXPECT_TRUE(overlaps(box, Capsule{Vec3(12, 5, 5), Vec3(20, 5, 5), 2}));  // end touches a face
   EXPECT_FALSE(overlaps(box, Capsule{Vec3(12, 5, 5), Vec3(20, 5, 5), 1.999}));
   // Parallel to the edge x = 10, y = 10 at offset (3, 4): distance exactly 5.
   EXPECT_TRUE(overlaps(box, Capsule{Vec3(13, 14, -3), Vec3(13, 14, 30), 5}));

@@ -42,7 +42,7 @@ using AllConfigs = ::testing::Types<Config<Aabb> BOXTREE_FOR_EACH_NON_AABB_VOLUM
 #undef BOXTREE_TIGHT_CONFIG_ENTRY
 
 class ConfigNames {
-public:
+ public:
   template <class C>
   static std::string GetName(int) {
     using V = typename C::Volume;
@@ -100,8 +100,7 @@ TYPED_TEST(Methods, OverlapsMatchBruteForce) {
 
 TYPED_TEST(Methods, PlanesAndStabbingMatchBruteForce) {
   {
-    for (const auto& [name, mesh] : procedural_meshes())
-      check_planes_and_stabbing(TypeParam::build(mesh), 40, name);
+    for (const auto& [name, mesh] : procedural_meshes()) check_planes_and_stabbing(TypeParam::build(mesh), 40, name);
   }
 }
 
@@ -135,8 +134,8 @@ TEST(Methods, NamesParseAndRoundTrip) {
     EXPECT_EQ(settings_for(parse_method(name + "-tight")).parent_fit, ParentFit::fit_facets);
     EXPECT_EQ(settings_for(parse_method(name)).parent_fit, ParentFit::enclose_children);
   }
-  for (const char* bad : {"", "octree", "aabb+aabb@3", "pie-min+aabb@", "pie-min+aabb@0", "pie-min+aabb@x", "pie-min+obb@2",
-                          "aabb-tight", "-tight", "obb-min-tight-tight", "obb-min+aabb@3-tight"}) {
+  for (const char* bad : {"", "octree", "aabb+aabb@3", "pie-min+aabb@", "pie-min+aabb@0", "pie-min+aabb@x",
+                          "pie-min+obb@2", "aabb-tight", "-tight", "obb-min-tight-tight", "obb-min+aabb@3-tight"}) {
     try {
       parse_method(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";

@@ -65,7 +65,8 @@ void expect_faithful_packing(const Tree<V>& tree, const PackedPrismTree& packed,
     EXPECT_NEAR(decoded.axis.norm(), 1, 1e-12) << name;
     EXPECT_GT(decoded.axis.dot(exact.axis), 0.99) << name << ": the winding gives the axis its sign";
     for (const Vec3& corner : corners(exact))
-      EXPECT_TRUE(in_prism(decoded, corner)) << name << " node " << p.exact << ": exact corner outside the packed prism";
+      EXPECT_TRUE(in_prism(decoded, corner))
+          << name << " node " << p.exact << ": exact corner outside the packed prism";
     exact_area += surface_area(exact);
     packed_area += surface_area(decoded);
     const PackedPrismTree::Node& node = packed.nodes()[p.link];
@@ -215,7 +216,8 @@ TYPED_TEST(PackedPrismTreeTest, CollideMatchesExactTreeAndBruteForce) {
       EXPECT_EQ(collide(packed_a, packed_b, t), collide(a, b, t));
       CollideSettings first;
       first.stop_at_first = true;
-      EXPECT_EQ(collide(packed_a, packed_b, t, nullptr, first).size(), std::min<std::size_t>(1, collide(a, b, t).size()));
+      EXPECT_EQ(collide(packed_a, packed_b, t, nullptr, first).size(),
+                std::min<std::size_t>(1, collide(a, b, t).size()));
     }
   }
   EXPECT_GT(total, 0u);

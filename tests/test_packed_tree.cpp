@@ -108,7 +108,8 @@ void expect_valid_packing(const Tree<Aabb>& tree, const PackedAabbTree& packed, 
 // two grid steps of it), so always a superset of the exact tree's leaf-volume answer.
 template <class Shape>
 void expect_overlaps(const Tree<Aabb>& tree, const PackedAabbTree& packed,
-                     const std::map<FacetId, std::pair<long, int>>& slots, const Shape& shape, const std::string& what) {
+                     const std::map<FacetId, std::pair<long, int>>& slots, const Shape& shape,
+                     const std::string& what) {
   EXPECT_EQ(query_overlap(packed, shape), brute_overlap(packed.mesh(), shape)) << what;
   const std::vector<FacetId> got = query_overlap(packed, shape, nullptr, FacetTest::leaf_volume);
   const std::vector<FacetId> exact_leaves = query_overlap(tree, shape, nullptr, FacetTest::leaf_volume);
@@ -261,14 +262,14 @@ void check_batched_rays(const TriangleMesh& mesh, const std::string& name, std::
       ray.direction = r.unit_vector();
     }
     if (i % 5 == 0) ray.t_max = r.uniform(0.2, 2);
-    if (i % 37 == 3) ray.origin.x() = nan;           // invalid: no hit
-    if (i % 41 == 4) ray.direction = Vec3::Zero();   // invalid: no hit
+    if (i % 37 == 3) ray.origin.x() = nan;          // invalid: no hit
+    if (i % 41 == 4) ray.direction = Vec3::Zero();  // invalid: no hit
     if (i % 43 == 5) ray.t_min = ray.t_max = 1e30;  // starts beyond the mesh
     rays.push_back(ray);
   }
   int hits = 0;
-  for (const std::size_t count : {std::size_t(0), std::size_t(1), std::size_t(7), std::size_t(8), std::size_t(9),
-                                  rays.size()}) {
+  for (const std::size_t count :
+       {std::size_t(0), std::size_t(1), std::size_t(7), std::size_t(8), std::size_t(9), rays.size()}) {
     std::vector<std::optional<RayHit>> got(count, RayHit{});  // every slot must be written
     QueryStats batch_stats;
     ray_closest_hits(packed, rays.data(), count, got.data(), &batch_stats);
@@ -308,8 +309,9 @@ TEST(PackedTree, BatchedRaysMatchSingleRaysAndBruteForce) {
   // the tree's nodes, the triangles and the vertices).
   const TriangleMesh large = make_terrain(256, 256, 4);
   const PackedAabbTree large_tree(build_tree<Aabb>(large));
-  ASSERT_GT(large_tree.memory_bytes() + large.triangles.size() * sizeof(Triangle) + large.vertices.size() * sizeof(Vec3),
-            std::size_t(2) << 20);
+  ASSERT_GT(
+      large_tree.memory_bytes() + large.triangles.size() * sizeof(Triangle) + large.vertices.size() * sizeof(Vec3),
+      std::size_t(2) << 20);
   check_batched_rays(large, "terrain 256", 7, 10);
 }
 

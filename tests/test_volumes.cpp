@@ -71,7 +71,6 @@ std::string str(const Vec3& v) {
 // ------------------------------------------------------------------------------------------
 // Random data
 
-
 // A triangle around `center` of size about `size`; degenerate (a point, a segment, collinear
 // corners, a needle) with probability `degenerate`.
 std::array<Vec3, 3> random_triangle(Random& rng, const Vec3& center, Real size, Real degenerate) {
@@ -79,16 +78,26 @@ std::array<Vec3, 3> random_triangle(Random& rng, const Vec3& center, Real size, 
                            center + size * rng.point(-1, 1)};
   if (rng.chance(degenerate)) {
     switch (rng.integer(0, 4)) {
-      case 0: t[1] = t[0]; t[2] = t[0]; break;                                      // a point
-      case 1: t[2] = t[0]; break;                                                   // two corners coincide
-      case 2: t[2] = t[0] + rng.uniform(-1, 2) * (t[1] - t[0]); break;              // collinear
-      case 3: t[2] = t[0] + 0.5 * (t[1] - t[0]) + 1e-9 * size * rng.unit_vector(); break;  // needle
-      default: t[2] = t[0] + 0.3 * (t[1] - t[0]) + 1e-3 * size * rng.unit_vector(); break;  // sliver
+      case 0:
+        t[1] = t[0];
+        t[2] = t[0];
+        break;  // a point
+      case 1:
+        t[2] = t[0];
+        break;  // two corners coincide
+      case 2:
+        t[2] = t[0] + rng.uniform(-1, 2) * (t[1] - t[0]);
+        break;  // collinear
+      case 3:
+        t[2] = t[0] + 0.5 * (t[1] - t[0]) + 1e-9 * size * rng.unit_vector();
+        break;  // needle
+      default:
+        t[2] = t[0] + 0.3 * (t[1] - t[0]) + 1e-3 * size * rng.unit_vector();
+        break;  // sliver
     }
   }
   return t;
 }
-
 
 // The Minkowski sum with the cube [-tau, tau]^3 (as the hull of the sums of corners).
 std::vector<RPoint> grown(const std::vector<RPoint>& p, const Rational& tau) {
@@ -144,9 +153,12 @@ struct ExactShape {
 
   ConvexPolytope polytope() const {
     switch (kind) {
-      case kAabb: return polytope_of(aabb);
-      case kObb: return polytope_of(obb);
-      default: return polytope_of(prism);
+      case kAabb:
+        return polytope_of(aabb);
+      case kObb:
+        return polytope_of(obb);
+      default:
+        return polytope_of(prism);
     }
   }
   std::vector<RPoint> exact_corners() const {
@@ -156,9 +168,12 @@ struct ExactShape {
   }
   bool flat() const {
     switch (kind) {
-      case kAabb: return (aabb.max - aabb.min).minCoeff() == 0;
-      case kObb: return obb.half_extents.minCoeff() == 0;
-      default: return prism.height == 0 || (prism.base[1] - prism.base[0]).cross(prism.base[2] - prism.base[0]).isZero(0);
+      case kAabb:
+        return (aabb.max - aabb.min).minCoeff() == 0;
+      case kObb:
+        return obb.half_extents.minCoeff() == 0;
+      default:
+        return prism.height == 0 || (prism.base[1] - prism.base[0]).cross(prism.base[2] - prism.base[0]).isZero(0);
     }
   }
 };
@@ -188,9 +203,16 @@ ExactShape random_exact_shape(Random& rng, ExactShape::Kind kind, int reach = 3)
     }
     if (rng.chance(0.25)) {
       switch (rng.integer(0, 2)) {
-        case 0: base[1] = base[0]; base[2] = base[0]; break;                 // a point
-        case 1: base[2] = base[1]; break;                                    // a segment
-        default: base[2] = base[0] + Real(2) * (base[1] - base[0]); break;   // collinear
+        case 0:
+          base[1] = base[0];
+          base[2] = base[0];
+          break;  // a point
+        case 1:
+          base[2] = base[1];
+          break;  // a segment
+        default:
+          base[2] = base[0] + Real(2) * (base[1] - base[0]);
+          break;  // collinear
       }
     }
     s.prism.base = base;
@@ -840,20 +862,23 @@ TEST(SatExact, FlatAndCoplanarShapes) {
   // Coplanar flat shapes need the in-plane edge normals; collinear segments need the direction
   // along them; points need any basis.
   const auto rect = [](Real x0, Real y0, Real x1, Real y1) {
-    return polytope_of(Obb{Vec3((x0 + x1) / 2, (y0 + y1) / 2, 0), Mat3::Identity(), Vec3((x1 - x0) / 2, (y1 - y0) / 2, 0)});
+    return polytope_of(
+        Obb{Vec3((x0 + x1) / 2, (y0 + y1) / 2, 0), Mat3::Identity(), Vec3((x1 - x0) / 2, (y1 - y0) / 2, 0)});
   };
-  const auto tri = [](const Vec3& a, const Vec3& b, const Vec3& c) { return polytope_of(prism_from_triangle(a, b, c)); };
+  const auto tri = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return polytope_of(prism_from_triangle(a, b, c));
+  };
   // Rectangles in z = 0.
-  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(1, 0, 2, 1)));             // sharing an edge
-  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(1, 1, 2, 2)));             // sharing a corner
-  EXPECT_FALSE(sat_overlap(rect(0, 0, 1, 1), rect(1.001, 0, 2, 1)));        // gap along x
-  EXPECT_TRUE(sat_overlap(rect(0, 0, 2, 2), rect(0.5, 0.5, 1, 1)));         // one inside the other
-  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(0, 0, 1, 1)));             // identical
+  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(1, 0, 2, 1)));       // sharing an edge
+  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(1, 1, 2, 2)));       // sharing a corner
+  EXPECT_FALSE(sat_overlap(rect(0, 0, 1, 1), rect(1.001, 0, 2, 1)));  // gap along x
+  EXPECT_TRUE(sat_overlap(rect(0, 0, 2, 2), rect(0.5, 0.5, 1, 1)));   // one inside the other
+  EXPECT_TRUE(sat_overlap(rect(0, 0, 1, 1), rect(0, 0, 1, 1)));       // identical
   // Triangles in z = 0.
   const Vec3 o(0, 0, 0), x(1, 0, 0), y(0, 1, 0);
-  EXPECT_TRUE(sat_overlap(tri(o, x, y), tri(x, y, Vec3(1, 1, 0))));          // sharing the hypotenuse
+  EXPECT_TRUE(sat_overlap(tri(o, x, y), tri(x, y, Vec3(1, 1, 0))));  // sharing the hypotenuse
   EXPECT_FALSE(sat_overlap(tri(o, x, y), tri(Vec3(0.6, 0.6, 0), Vec3(2, 0.6, 0), Vec3(0.6, 2, 0))));  // beyond it
-  EXPECT_TRUE(sat_overlap(tri(o, x, y), tri(Vec3(0.5, 0.5, 0), Vec3(2, 0.5, 0), Vec3(0.5, 2, 0))));  // touching it
+  EXPECT_TRUE(sat_overlap(tri(o, x, y), tri(Vec3(0.5, 0.5, 0), Vec3(2, 0.5, 0), Vec3(0.5, 2, 0))));   // touching it
   EXPECT_TRUE(sat_overlap(tri(o, x, y), tri(x, Vec3(2, 0, 0), Vec3(2, 1, 0))));  // sharing a corner
   EXPECT_FALSE(sat_overlap(tri(o, x, y), tri(Vec3(1.01, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 0))));
   // A flat triangle and a flat rectangle, coplanar, near a corner (the separating line is the
@@ -1022,8 +1047,8 @@ TEST(SatFloat, NearlyCoplanarSegmentAgainstAVertex) {
     const bool apart = rng.chance(0.5);
     const Real gap = std::pow(10.0, rng.uniform(-6, -2));
     const Vec3 p(apart ? 1 + gap : 1 - gap, 0.5, 0);
-    ConvexPolytope b = polytope_of(prism_from_triangle(p - Vec3(0, rng.uniform(0.5, 2), 0),
-                                                       p + Vec3(0, rng.uniform(0.5, 2), 0), p));
+    ConvexPolytope b =
+        polytope_of(prism_from_triangle(p - Vec3(0, rng.uniform(0.5, 2), 0), p + Vec3(0, rng.uniform(0.5, 2), 0), p));
     const Real theta = std::pow(10.0, rng.uniform(-12, -1)) * (rng.chance(0.5) ? 1 : -1);
     const Mat3 tilt = Eigen::AngleAxisd(theta, Vec3::UnitX()).toRotationMatrix();
     b = b.transformed(RigidTransform{tilt, p - tilt * p});
@@ -1399,7 +1424,7 @@ TYPED_TEST(VolumeKinds, RayTouchingACornerOrLyingInAFlatVolumeHits) {
 TEST(VolumeRay, ExactCasesOnAxisAlignedShapes) {
   // Exact geometry: rays grazing faces and edges, lying in a flat box, clipped by [t_min, t_max].
   // Entries are exact up to the tests' conservative margins (~64 ulps of the distances).
-  const Obb box{Vec3(1, 1, 1), Mat3::Identity(), Vec3(1, 1, 1)};  // [0, 2]^3
+  const Obb box{Vec3(1, 1, 1), Mat3::Identity(), Vec3(1, 1, 1)};   // [0, 2]^3
   const Obb flat{Vec3(1, 1, 0), Mat3::Identity(), Vec3(1, 1, 0)};  // [0, 2]^2 x {0}
   Real t = -1;
   const auto hit = [&](const auto& v, const Vec3& o, const Vec3& d, Real t_min = 0, Real t_max = kInf) {
@@ -1407,8 +1432,8 @@ TEST(VolumeRay, ExactCasesOnAxisAlignedShapes) {
   };
   EXPECT_TRUE(hit(box, Vec3(-1, 1, 1), Vec3(1, 0, 0)));
   EXPECT_NEAR(t, 1, 1e-12);
-  EXPECT_TRUE(hit(box, Vec3(-1, 2, 1), Vec3(1, 0, 0)));   // along a face
-  EXPECT_TRUE(hit(box, Vec3(-1, 2, 2), Vec3(1, 0, 0)));   // along an edge
+  EXPECT_TRUE(hit(box, Vec3(-1, 2, 1), Vec3(1, 0, 0)));    // along a face
+  EXPECT_TRUE(hit(box, Vec3(-1, 2, 2), Vec3(1, 0, 0)));    // along an edge
   EXPECT_TRUE(hit(box, Vec3(-1, -1, -1), Vec3(1, 1, 1)));  // through a corner
   EXPECT_FALSE(hit(box, Vec3(-1, 2.001, 1), Vec3(1, 0, 0)));
   EXPECT_FALSE(hit(box, Vec3(-1, 1, 1), Vec3(1, 0, 0), 0, 0.999));
@@ -1419,7 +1444,7 @@ TEST(VolumeRay, ExactCasesOnAxisAlignedShapes) {
   EXPECT_FALSE(hit(box, Vec3(-1, 1, 1), Vec3(-1, 0, 0)));
   EXPECT_TRUE(hit(flat, Vec3(-1, 1, 0), Vec3(1, 0.1, 0)));  // lying in the flat box
   EXPECT_NEAR(t, 1, 1e-12);
-  EXPECT_TRUE(hit(flat, Vec3(1, 1, 5), Vec3(0, 0, -1)));    // through it
+  EXPECT_TRUE(hit(flat, Vec3(1, 1, 5), Vec3(0, 0, -1)));  // through it
   EXPECT_NEAR(t, 5, 1e-12);
   EXPECT_FALSE(hit(flat, Vec3(-1, 1, 1e-9), Vec3(1, 0, 0)));
 
@@ -1431,13 +1456,13 @@ TEST(VolumeRay, ExactCasesOnAxisAlignedShapes) {
   EXPECT_NEAR(t, 2, 1e-12);
   EXPECT_TRUE(hit(p, Vec3(-1, 3, 0.5), Vec3(1, -1, 0)));  // along the hypotenuse
   EXPECT_FALSE(hit(p, Vec3(-1, 3.001, 0.5), Vec3(1, -1, 0)));
-  EXPECT_TRUE(hit(p, Vec3(2, 0, 5), Vec3(0, 0, -1)));     // down a vertical edge
+  EXPECT_TRUE(hit(p, Vec3(2, 0, 5), Vec3(0, 0, -1)));  // down a vertical edge
   EXPECT_NEAR(t, 4, 1e-12);
   EXPECT_TRUE(hit(p, Vec3(0.5, 0.5, 3), Vec3(0, 0, -1)));
   EXPECT_NEAR(t, 2, 1e-12);
   EXPECT_FALSE(hit(p, Vec3(1.001, 1.001, 3), Vec3(0, 0, -1)));
-  p.height = 0;  // the facet
-  EXPECT_TRUE(hit(p, Vec3(-1, 1, 0), Vec3(1, 0, 0)));     // in its plane
+  p.height = 0;                                        // the facet
+  EXPECT_TRUE(hit(p, Vec3(-1, 1, 0), Vec3(1, 0, 0)));  // in its plane
   EXPECT_NEAR(t, 1, 1e-12);
   EXPECT_FALSE(hit(p, Vec3(-1, 1, 1e-9), Vec3(1, 0, 0)));
   // A segment and a point.

@@ -35,8 +35,8 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <fcl/fcl.h>
+#include <CLI/CLI.hpp>
 
 #include "bench_report.h"
 #include "boxtree/build.h"
@@ -55,9 +55,9 @@ namespace {
 
 using boxtree::bench::Clock;
 using boxtree::bench::format;
+using boxtree::bench::Row;
 using boxtree::bench::table;
 using boxtree::bench::with_commas;
-using boxtree::bench::Row;
 
 constexpr const char* kTimeMetric = "build_seconds (lower is better)";
 constexpr const char* kBytesMetric = "hierarchy_bytes_per_facet (lower is better)";
@@ -158,7 +158,8 @@ Measure build_fcl(const boxtree::TriangleMesh& mesh, const std::string& name) {
   m.nodes = std::size_t(model->getNumBVs());
   m.bytes = m.nodes * sizeof(fcl::BVNode<BV>) + mesh.facet_count() * sizeof(unsigned);
   m.note = std::to_string(sizeof(fcl::BVNode<BV>)) + " B/node + 4 B/facet primitive indices; mesh copy " +
-           with_commas(vertices.size() * sizeof(fcl::Vector3d) + triangles.size() * sizeof(fcl::Triangle)) + " B not counted";
+           with_commas(vertices.size() * sizeof(fcl::Vector3d) + triangles.size() * sizeof(fcl::Triangle)) +
+           " B not counted";
   return m;
 }
 
@@ -218,7 +219,8 @@ int main(int argc, char** argv) {
   app.add_option("--large-from", large_from, "facet count from which only --large-methods are built");
   app.add_option("--sizes", sizes_list, "comma-separated facet counts (default 10000,100000,1000000,4000000)");
   app.add_option("--seed", seed, "terrain seed");
-  app.add_option("--ranking", g_ranking, "candidate ranking of the oriented kinds (BuildSettings::ranking; default: the library's)")
+  app.add_option("--ranking", g_ranking,
+                 "candidate ranking of the oriented kinds (BuildSettings::ranking; default: the library's)")
       ->check(CLI::IsMember({"merged-volume", "bounding-box"}));
   app.add_option("--repeats", min_repeats, "build every mesh at least this many times and keep the fastest build");
   CLI11_PARSE(app, argc, argv);
@@ -237,7 +239,8 @@ int main(int argc, char** argv) {
         // aabb-exact, pie-...-exact: the bench-only exact trees
         const boxtree::bench::ExactSuffix split = boxtree::bench::split_exact_suffix(m);
         const boxtree::Method method = boxtree::parse_method(split.method);
-        if (split.exact && !boxtree::bench::has_packed_form(method)) throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
+        if (split.exact && !boxtree::bench::has_packed_form(method))
+          throw std::runtime_error("'" + m + "': -exact applies to aabb and pie-slice methods");
       }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "build_bench: error: %s\n", e.what());
@@ -245,20 +248,24 @@ int main(int argc, char** argv) {
   }
   const auto total_start = Clock::now();
   const std::vector<std::string> fcl_bvs = {"AABB", "OBB", "RSS", "OBBRSS", "kIOS"};
-  if (!boxtree::peers::embree_available()) std::printf("Embree peer skipped: not found at configure time (Debian: libembree-dev)\n");
+  if (!boxtree::peers::embree_available())
+    std::printf("Embree peer skipped: not found at configure time (Debian: libembree-dev)\n");
 
   std::vector<Row> rows;
   std::ostringstream md, csv;
   csv << "facets,engine,kind,build_seconds,bytes,bytes_per_facet,nodes\n";
-  const std::string peers = std::string(boxtree::peers::bullet_version()) + "; FCL " FCL_VERSION "; " +
-                            boxtree::peers::embree_version();
+  const std::string peers =
+      std::string(boxtree::peers::bullet_version()) + "; FCL " FCL_VERSION "; " + boxtree::peers::embree_version();
   md << "## Build time and memory: boxtree vs Bullet, FCL, Embree\n\n" << boxtree::bench::machine_markdown(peers);
   md << "- Meshes: `make_terrain(c, c, " << seed
-     << ")` with c = round(sqrt(n / 2)) cells per side (2 c^2 facets). Single-threaded builds; meshes under 50k facets are "
+     << ")` with c = round(sqrt(n / 2)) cells per side (2 c^2 facets). Single-threaded builds; meshes under 50k facets "
+        "are "
         "built 3 times (every mesh at least --repeats times, here "
-     << min_repeats << ") and the fastest build is kept.\n"
+     << min_repeats
+     << ") and the fastest build is kept.\n"
         "- Bytes per facet: the hierarchy a user pays for beyond the mesh. boxtree: `Tree::memory_bytes()` (volumes + "
-        "4-byte links; the mesh is shared, not copied). Bullet: quantized nodes (16 B) + subtree headers + the leaf-node "
+        "4-byte links; the mesh is shared, not copied). Bullet: quantized nodes (16 B) + subtree headers + the "
+        "leaf-node "
         "array it keeps after the build (`btBvhTriangleMeshShape`, `useQuantizedAabbCompression = true`). FCL: "
         "`getNumBVs() x sizeof(BVNode<BV>)` + 4 B/facet primitive indices (FCL's own copy of the mesh not counted). "
         "Embree: bytes held after `rtcCommitScene` by its memory monitor (BVH nodes + primitive blocks, which hold "
@@ -266,7 +273,8 @@ int main(int argc, char** argv) {
         "- Build time: boxtree `build_tree`; Bullet the shape constructor; FCL `beginModel`..`endModel`; Embree "
         "`rtcNewScene`..`rtcCommitScene` (device \"threads=1\", medium quality).\n"
         "- Ratios: boxtree / peer, lower is better for both (below 1: boxtree builds faster / uses less memory).\n"
-        "- Methods built: " << methods_list << " below " << with_commas(large_from) << " facets, " << large_methods_list
+        "- Methods built: "
+     << methods_list << " below " << with_commas(large_from) << " facets, " << large_methods_list
      << " from there up (the others are too slow to build at that size within the suite's time budget; see the "
         "per-facet build times of the smaller sizes).\n\n";
 
@@ -275,7 +283,8 @@ int main(int argc, char** argv) {
     auto mesh = std::make_shared<const boxtree::TriangleMesh>(boxtree::make_terrain(cells, cells, seed));
     const std::size_t facets = mesh->facet_count();
     const int repeats = std::max(min_repeats, facets < 50000 ? 3 : 1);
-    const std::string case_name = "terrain-" + (target >= 1000000 ? std::to_string(target / 1000000) + "M" : std::to_string(target / 1000) + "k");
+    const std::string case_name =
+        "terrain-" + (target >= 1000000 ? std::to_string(target / 1000000) + "M" : std::to_string(target / 1000) + "k");
     std::vector<Measure> boxtree_runs, peer_runs;
     const auto& these_methods = facets >= large_from ? large_methods : methods;
     for (const auto& m : these_methods) {
@@ -289,10 +298,12 @@ int main(int argc, char** argv) {
     if (peer_wanted("embree") && boxtree::peers::embree_available())
       peer_runs.push_back(fastest(repeats, [&] { return build_embree(*mesh); }));
 
-    std::vector<std::vector<std::string>> abs{{"engine", "build s", "us/facet", "bytes", "B/facet", "nodes", "what is counted"}};
+    std::vector<std::vector<std::string>> abs{
+        {"engine", "build s", "us/facet", "bytes", "B/facet", "nodes", "what is counted"}};
     auto add = [&](const Measure& m, const char* kind) {
-      abs.push_back({m.engine, format("%.3f", m.seconds), format("%.2f", 1e6 * m.seconds / double(facets)), with_commas(m.bytes),
-                     format("%.1f", double(m.bytes) / double(facets)), m.nodes ? with_commas(m.nodes) : "", m.note});
+      abs.push_back({m.engine, format("%.3f", m.seconds), format("%.2f", 1e6 * m.seconds / double(facets)),
+                     with_commas(m.bytes), format("%.1f", double(m.bytes) / double(facets)),
+                     m.nodes ? with_commas(m.nodes) : "", m.note});
       csv << facets << "," << m.engine << "," << kind << "," << m.seconds << "," << m.bytes << ","
           << double(m.bytes) / double(facets) << "," << m.nodes << "\n";
     };
@@ -304,23 +315,28 @@ int main(int argc, char** argv) {
       const std::string method = b.engine.substr(std::string("boxtree ").size());
       std::vector<std::string> line{method};
       for (const auto& p : peer_runs) {
-        line.push_back(format("%.2f", b.seconds / p.seconds) + " / " + format("%.2f", double(b.bytes) / double(p.bytes)));
-        rows.push_back(boxtree::bench::compare("build_memory", case_name, kTimeMetric, method, b.seconds, p.engine, p.seconds));
-        rows.push_back(boxtree::bench::compare("build_memory", case_name, kBytesMetric, method, double(b.bytes) / double(facets),
-                                               p.engine, double(p.bytes) / double(facets)));
+        line.push_back(format("%.2f", b.seconds / p.seconds) + " / " +
+                       format("%.2f", double(b.bytes) / double(p.bytes)));
+        rows.push_back(
+            boxtree::bench::compare("build_memory", case_name, kTimeMetric, method, b.seconds, p.engine, p.seconds));
+        rows.push_back(boxtree::bench::compare("build_memory", case_name, kBytesMetric, method,
+                                               double(b.bytes) / double(facets), p.engine,
+                                               double(p.bytes) / double(facets)));
       }
       ratios.push_back(line);
     }
-    const std::string title = case_name + ": make_terrain(" + std::to_string(cells) + ", " + std::to_string(cells) + "), " +
-                              with_commas(facets) + " facets";
+    const std::string title = case_name + ": make_terrain(" + std::to_string(cells) + ", " + std::to_string(cells) +
+                              "), " + with_commas(facets) + " facets";
     std::printf("\n%s\n%s\nratios boxtree / peer: build time / bytes (lower: boxtree better)\n%s", title.c_str(),
                 table(abs, false).c_str(), table(ratios, false).c_str());
     std::fflush(stdout);
-    md << "### " << title << "\n\n" << table(abs, true) << "\nRatios boxtree / peer, build time / bytes (below 1: boxtree better):\n\n"
+    md << "### " << title << "\n\n"
+       << table(abs, true) << "\nRatios boxtree / peer, build time / bytes (below 1: boxtree better):\n\n"
        << table(ratios, true) << "\n";
   }
   const double total = boxtree::bench::seconds_since(total_start);
-  std::printf("\nbuild_bench: %.1f s, peak resident memory %.0f MB\n", total, double(boxtree::bench::peak_rss_bytes()) / 1e6);
+  std::printf("\nbuild_bench: %.1f s, peak resident memory %.0f MB\n", total,
+              double(boxtree::bench::peak_rss_bytes()) / 1e6);
   md << "Whole build benchmark: " << format("%.1f", total) << " s.\n";
   try {
     if (!plot_dir.empty()) {
@@ -332,8 +348,10 @@ int main(int argc, char** argv) {
     if (!json_path.empty()) boxtree::bench::write_json(json_path, rows);
     if (!markdown_path.empty()) boxtree::bench::write_text(markdown_path, md.str());
     if (!plot_dir.empty()) {
-      const std::string command = "/usr/bin/python3 '" BOXTREE_BENCH_SOURCE_DIR "/plot.py' '" + csv_path + "' '" + plot_dir + "'";
-      if (std::system(command.c_str()) != 0) std::fprintf(stderr, "build_bench: plotting failed: %s\n", command.c_str());
+      const std::string command =
+          "/usr/bin/python3 '" BOXTREE_BENCH_SOURCE_DIR "/plot.py' '" + csv_path + "' '" + plot_dir + "'";
+      if (std::system(command.c_str()) != 0)
+        std::fprintf(stderr, "build_bench: plotting failed: %s\n", command.c_str());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "build_bench: error: %s\n", e.what());

@@ -9,8 +9,8 @@
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <btBulletDynamicsCommon.h>
 
-#include <algorithm>
 #include <CLI/CLI.hpp>
+#include <algorithm>
 
 #include <chrono>
 #include <cstdio>
@@ -51,9 +51,12 @@ void leave_zone() {}
 enum class Midphase { bullet_bvh, boxtree_process_all, boxtree_algorithm };
 const char* name(Midphase m) {
   switch (m) {
-    case Midphase::bullet_bvh: return "bullet btBvhTriangleMeshShape";
-    case Midphase::boxtree_process_all: return "boxtree via processAllTriangles";
-    default: return "boxtree algorithm";
+    case Midphase::bullet_bvh:
+      return "bullet btBvhTriangleMeshShape";
+    case Midphase::boxtree_process_all:
+      return "boxtree via processAllTriangles";
+    default:
+      return "boxtree algorithm";
   }
 }
 
@@ -104,13 +107,22 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
   for (const auto& v : terrain.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
   for (int i = 0; i < bodies; ++i) {
     switch (i % 5) {
-      case 0: shapes.push_back(std::make_unique<btSphereShape>(size(rng))); break;
-      case 1: shapes.push_back(std::make_unique<btBoxShape>(btVector3(size(rng), size(rng), size(rng)))); break;
-      case 2: shapes.push_back(std::make_unique<btCapsuleShapeZ>(size(rng) * 0.7f, size(rng) * 1.5f)); break;
-      case 3: shapes.push_back(std::make_unique<btCylinderShapeZ>(btVector3(size(rng), size(rng), size(rng)))); break;
+      case 0:
+        shapes.push_back(std::make_unique<btSphereShape>(size(rng)));
+        break;
+      case 1:
+        shapes.push_back(std::make_unique<btBoxShape>(btVector3(size(rng), size(rng), size(rng))));
+        break;
+      case 2:
+        shapes.push_back(std::make_unique<btCapsuleShapeZ>(size(rng) * 0.7f, size(rng) * 1.5f));
+        break;
+      case 3:
+        shapes.push_back(std::make_unique<btCylinderShapeZ>(btVector3(size(rng), size(rng), size(rng))));
+        break;
       default: {
         auto hull = std::make_unique<btConvexHullShape>();
-        for (int k = 0; k < 12; ++k) hull->addPoint(btVector3(size(rng) - 0.55f, size(rng) - 0.55f, size(rng) - 0.55f), false);
+        for (int k = 0; k < 12; ++k)
+          hull->addPoint(btVector3(size(rng) - 0.55f, size(rng) - 0.55f, size(rng) - 0.55f), false);
         hull->recalcLocalAabb();
         shapes.push_back(std::move(hull));
       }
@@ -133,7 +145,8 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
   const auto t0 = Clock::now();
   for (int s = 0; s < steps; ++s) {
     world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
-    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) contacts += dispatcher.getManifoldByIndexInternal(m)->getNumContacts();
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m)
+      contacts += dispatcher.getManifoldByIndexInternal(m)->getNumContacts();
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 
@@ -160,8 +173,8 @@ struct RockResult {
   int below_terrain = 0;
 };
 
-RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const std::string& method, int rocks, int steps,
-                     std::uint64_t seed) {
+RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const std::string& method, int rocks,
+                     int steps, std::uint64_t seed) {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher(&config);
   btDbvtBroadphase broadphase;
@@ -182,8 +195,9 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
         for (int k = 0; k < 3; ++k) vertices.push_back(btScalar(v[k]));
       for (const auto& t : m.triangles)
         for (auto v : t) indices.push_back(int(v));
-      array = std::make_unique<btTriangleIndexVertexArray>(int(m.triangles.size()), indices.data(), 3 * int(sizeof(int)),
-                                                           int(m.vertices.size()), vertices.data(), 3 * int(sizeof(btScalar)));
+      array = std::make_unique<btTriangleIndexVertexArray>(int(m.triangles.size()), indices.data(),
+                                                           3 * int(sizeof(int)), int(m.vertices.size()),
+                                                           vertices.data(), 3 * int(sizeof(btScalar)));
     }
   };
   Arrays ground_arrays(terrain);
@@ -226,7 +240,8 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
   double contacts = 0;
   for (int s = 0; s < steps; ++s) {
     world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
-    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) contacts += dispatcher.getManifoldByIndexInternal(m)->getNumContacts();
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m)
+      contacts += dispatcher.getManifoldByIndexInternal(m)->getNumContacts();
   }
   RockResult r;
   r.collision_ms_per_step = 1000 * world.collision_seconds / steps;
@@ -253,25 +268,27 @@ int main(int argc, char** argv) {
   app.add_option("--method", method, "boxtree hierarchy method");
   app.add_option("--seed", seed, "random seed");
   int rocks = 20;
-  app.add_option("--rocks", rocks, "closed meshes dropped for the mesh-vs-mesh scene (0: skip)")->check(CLI::Range(0, 10000));
+  app.add_option("--rocks", rocks, "closed meshes dropped for the mesh-vs-mesh scene (0: skip)")
+      ->check(CLI::Range(0, 10000));
   CLI11_PARSE(app, argc, argv);
 
   btSetCustomEnterProfileZoneFunc(enter_zone);
   btSetCustomLeaveProfileZoneFunc(leave_zone);
   const auto terrain = boxtree::make_terrain(cells, cells, seed, 200, 20);
-  std::printf("terrain %zu facets, %d bodies, %d steps, method %s (Bullet %s precision)\n", terrain.facet_count(), bodies,
-              steps, method.c_str(), sizeof(btScalar) == 8 ? "double" : "single");
-  std::printf("%-34s %12s %10s %10s %14s %8s\n", "midphase", "collide ms", "step ms", "contacts", "tris to narrow", "fell");
+  std::printf("terrain %zu facets, %d bodies, %d steps, method %s (Bullet %s precision)\n", terrain.facet_count(),
+              bodies, steps, method.c_str(), sizeof(btScalar) == 8 ? "double" : "single");
+  std::printf("%-34s %12s %10s %10s %14s %8s\n", "midphase", "collide ms", "step ms", "contacts", "tris to narrow",
+              "fell");
   Result base;
   for (Midphase m : {Midphase::bullet_bvh, Midphase::boxtree_process_all, Midphase::boxtree_algorithm}) {
     const Result r = run(m, terrain, method, bodies, steps, seed);
     if (m == Midphase::bullet_bvh) base = r;
-    std::printf("%-34s %12.3f %10.3f %10.1f %14.1f %8d\n", name(m), r.collision_ms_per_step, r.step_ms, r.contacts_per_step,
-                r.triangles_per_step, r.below_terrain);
+    std::printf("%-34s %12.3f %10.3f %10.1f %14.1f %8d\n", name(m), r.collision_ms_per_step, r.step_ms,
+                r.contacts_per_step, r.triangles_per_step, r.below_terrain);
     if (m != Midphase::bullet_bvh) {
-      std::printf("%-34s %11.2fx %9.2fx %9.2fx %13.2fx\n", "  ratio to bullet", r.collision_ms_per_step / base.collision_ms_per_step,
-                  r.step_ms / base.step_ms, r.contacts_per_step / base.contacts_per_step,
-                  r.triangles_per_step / base.triangles_per_step);
+      std::printf("%-34s %11.2fx %9.2fx %9.2fx %13.2fx\n", "  ratio to bullet",
+                  r.collision_ms_per_step / base.collision_ms_per_step, r.step_ms / base.step_ms,
+                  r.contacts_per_step / base.contacts_per_step, r.triangles_per_step / base.triangles_per_step);
     }
   }
   if (rocks > 0) {

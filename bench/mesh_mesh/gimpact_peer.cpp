@@ -7,10 +7,10 @@
 #include "mesh_peers.h"
 
 #ifdef BOXTREE_MM_HAVE_BULLET
-#include <LinearMath/btScalar.h>
 #include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>
 #include <BulletCollision/Gimpact/btGImpactQuantizedBvh.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <LinearMath/btScalar.h>
 #endif
 
 namespace boxtree::peers {
@@ -36,9 +36,9 @@ struct GImpactMesh {
       for (int k = 0; k < 3; ++k) vertices.push_back(btScalar(v[k]));
     for (const Triangle& t : mesh.triangles)
       for (int k = 0; k < 3; ++k) indices.push_back(int(t[k]));
-    array = std::make_unique<btTriangleIndexVertexArray>(int(mesh.triangles.size()), indices.data(), 3 * int(sizeof(int)),
-                                                         int(mesh.vertices.size()), vertices.data(),
-                                                         3 * int(sizeof(btScalar)));
+    array = std::make_unique<btTriangleIndexVertexArray>(int(mesh.triangles.size()), indices.data(),
+                                                         3 * int(sizeof(int)), int(mesh.vertices.size()),
+                                                         vertices.data(), 3 * int(sizeof(btScalar)));
     const auto start = Clock::now();
     shape = std::make_unique<btGImpactMeshShape>(array.get());
     shape->setMargin(btScalar(margin));
@@ -51,10 +51,10 @@ struct GImpactMesh {
 
 btTransform to_bullet(const RigidTransform& t) {
   const Mat3& r = t.rotation;
-  return btTransform(btMatrix3x3(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)),
-                                 btScalar(r(1, 1)), btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)),
-                                 btScalar(r(2, 2))),
-                     btVector3(btScalar(t.translation.x()), btScalar(t.translation.y()), btScalar(t.translation.z())));
+  return btTransform(
+      btMatrix3x3(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)), btScalar(r(1, 1)),
+                  btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)), btScalar(r(2, 2))),
+      btVector3(btScalar(t.translation.x()), btScalar(t.translation.y()), btScalar(t.translation.z())));
 }
 }  // namespace
 

@@ -204,7 +204,7 @@ BenchMethod parse_bench_method(const std::string& name) {
 class TreeCache {
  public:
   std::pair<std::shared_ptr<const AnyTree>, double> get(const std::shared_ptr<const TriangleMesh>& mesh,
-                                                         const BenchMethod& m) {
+                                                        const BenchMethod& m) {
     Entry& e = entries_[{mesh.get(), m.name}];
     if (!e.tree) {
       const auto start = Clock::now();
@@ -248,7 +248,8 @@ BoxtreeResult run_boxtree(const BenchMethod& method, const Case& c, TreeCache& c
       found.clear();
       QueryStats stats;
       const auto start = Clock::now();
-      a->collide(*b, c.poses[p], [&](const FacetPair& pair) { return found.push_back(pair), true; }, &stats);
+      a->collide(
+          *b, c.poses[p], [&](const FacetPair& pair) { return found.push_back(pair), true; }, &stats);
       times.push_back(seconds_since(start));
       if (rep > 0) continue;
       r.volume_tests += stats.volume_tests;
@@ -291,8 +292,8 @@ struct CaseResult {
 };
 
 // Compares one source's pair lists with the reference, pose by pose; prints every mismatch.
-int check_pairs(const std::string& case_name, const std::string& source, const PosePairs& reference, const PosePairs& got,
-                std::size_t poses) {
+int check_pairs(const std::string& case_name, const std::string& source, const PosePairs& reference,
+                const PosePairs& got, std::size_t poses) {
   int bad = 0;
   for (std::size_t p = 0; p < poses && p < got.size(); ++p) {
     if (got[p] == reference[p]) continue;
@@ -303,8 +304,8 @@ int check_pairs(const std::string& case_name, const std::string& source, const P
   return bad;
 }
 
-CaseResult run_case(const Case& c, const std::vector<BenchMethod>& methods, TreeCache& cache, bool with_fcl, bool with_gimpact,
-                    bool with_ode, double brute_budget) {
+CaseResult run_case(const Case& c, const std::vector<BenchMethod>& methods, TreeCache& cache, bool with_fcl,
+                    bool with_gimpact, bool with_ode, double brute_budget) {
   CaseResult r;
   r.name = c.name;
   r.facets_a = c.a->facet_count();
@@ -379,7 +380,8 @@ void add_rows(const CaseResult& r, std::vector<bench::Row>& rows) {
     build.push_back({"fcl-" + bv, f.build_seconds});
   }
   auto best_of = [](const std::vector<PeerValue>& v) {
-    return *std::min_element(v.begin(), v.end(), [](const PeerValue& x, const PeerValue& y) { return x.value < y.value; });
+    return *std::min_element(v.begin(), v.end(),
+                             [](const PeerValue& x, const PeerValue& y) { return x.value < y.value; });
   };
   std::vector<PeerValue> best_seconds_peers, best_build_peers;
   if (!r.fcl.empty()) best_seconds_peers.push_back(best_of(seconds)), best_build_peers.push_back(best_of(build));
@@ -421,7 +423,8 @@ void add_rows(const CaseResult& r, std::vector<bench::Row>& rows) {
   }
   if (r.brute_poses > 0)
     add("pairs", "all", double(r.boxtree_pairs_on_brute_poses),
-        "brute-force (" + std::to_string(r.brute_poses) + (r.brute_poses == 1 ? " pose)" : " poses)"), double(r.brute_pairs));
+        "brute-force (" + std::to_string(r.brute_poses) + (r.brute_poses == 1 ? " pose)" : " poses)"),
+        double(r.brute_pairs));
   if (r.has_ode) add("contacts", "all", pairs, "ode-trimesh", double(r.ode.contacts));
   bench::Row d = bench::compare(kSection, r.name, "pairs_disagree", "all", double(r.disagreements), "all sources", 0);
   d.ratio.reset();
@@ -446,7 +449,8 @@ std::string tables(const std::vector<CaseResult>& results) {
   for (const CaseResult& r : results) {
     s << "| " << r.name << " |";
     std::uint64_t best = ~0ull, best_fcl = ~0ull;
-    for (const BoxtreeResult& b : r.boxtree) s << ' ' << count(b.volume_tests) << " |", best = std::min(best, b.volume_tests);
+    for (const BoxtreeResult& b : r.boxtree)
+      s << ' ' << count(b.volume_tests) << " |", best = std::min(best, b.volume_tests);
     for (const auto& [bv, f] : r.fcl) s << ' ' << count(f.bv_tests) << " |", best_fcl = std::min(best_fcl, f.bv_tests);
     s << ' ' << (r.fcl.empty() ? "-" : fmt("%.2f", double(best) / double(best_fcl))) << " |\n";
   }
@@ -474,7 +478,8 @@ std::string tables(const std::vector<CaseResult>& results) {
 
   s << "\n**Pairs** (intersecting facet pairs summed over the poses; ODE: contact points)\n\n"
        "| case | facets | poses (intersecting) | boxtree pairs | boxtree triangle tests (min-max over methods) | "
-       "FCL pairs | GImpact candidates | GImpact exact pairs | GImpact midphase ms | ODE contacts | brute force: poses, pairs | disagreements |\n"
+       "FCL pairs | GImpact candidates | GImpact exact pairs | GImpact midphase ms | ODE contacts | brute force: "
+       "poses, pairs | disagreements |\n"
        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const CaseResult& r : results) {
     std::uint64_t lo = ~0ull, hi = 0;
@@ -482,18 +487,20 @@ std::string tables(const std::vector<CaseResult>& results) {
     std::string fcl_pairs = "-";
     for (const auto& [bv, f] : r.fcl) {
       const std::string v = count(f.pairs);
-      if (fcl_pairs == "-") fcl_pairs = v;
-      else if (fcl_pairs != v) fcl_pairs = "differ";
+      if (fcl_pairs == "-")
+        fcl_pairs = v;
+      else if (fcl_pairs != v)
+        fcl_pairs = "differ";
     }
-    s << "| " << r.name << " | " << r.facets_a << " x " << r.facets_b << " | " << r.poses << " (" << r.poses_hit << ") | "
-      << count(r.boxtree.front().pairs) << " | " << count(lo) << "-" << count(hi) << " | " << fcl_pairs << " | "
-      << (r.has_gimpact ? count(r.gimpact.candidates) : "-") << " | " << (r.has_gimpact ? count(r.gimpact.pairs) : "-")
-      << " | " << (r.has_gimpact ? ms(r.gimpact.midphase_seconds) : "-") << " | "
+    s << "| " << r.name << " | " << r.facets_a << " x " << r.facets_b << " | " << r.poses << " (" << r.poses_hit
+      << ") | " << count(r.boxtree.front().pairs) << " | " << count(lo) << "-" << count(hi) << " | " << fcl_pairs
+      << " | " << (r.has_gimpact ? count(r.gimpact.candidates) : "-") << " | "
+      << (r.has_gimpact ? count(r.gimpact.pairs) : "-") << " | "
+      << (r.has_gimpact ? ms(r.gimpact.midphase_seconds) : "-") << " | "
       << (r.has_ode ? count(r.ode.contacts) + (r.ode.poses_at_cap ? " (cap hit)" : "") +
                           (r.ode.messages ? " (" + count(r.ode.messages) + " warnings)" : "")
                     : "-")
-      << " | "
-      << (r.brute_poses ? std::to_string(r.brute_poses) + ", " + count(r.brute_pairs) : "-") << " | "
+      << " | " << (r.brute_poses ? std::to_string(r.brute_poses) + ", " + count(r.brute_pairs) : "-") << " | "
       << (r.disagreements ? "**" + std::to_string(r.disagreements) + "**" : "0") << " |\n";
   }
 
@@ -535,7 +542,8 @@ int main(int argc, char** argv) {
   app.add_option("--methods", methods_text, "Comma-separated boxtree methods (the first one is the pair reference)")
       ->capture_default_str();
   app.add_option("--bunny", bunny_file, "Bunny file in --meshes")->capture_default_str();
-  app.add_option("--repeats", repeats, "Timed runs of every query (the fastest per pose is summed)")->capture_default_str();
+  app.add_option("--repeats", repeats, "Timed runs of every query (the fastest per pose is summed)")
+      ->capture_default_str();
   app.add_option("--bunny-poses", bunny_poses, "Poses of bunny vs bunny")->capture_default_str();
   app.add_option("--env-poses", env_poses, "Poses of env vs rob")->capture_default_str();
   app.add_flag("!--no-fcl", with_fcl, "Skip FCL");
@@ -561,15 +569,24 @@ int main(int argc, char** argv) {
       bool first = true;
       for (double gap : {0.0, 0.001, 0.003, 0.01, 0.03, 0.1}) {
         std::string gap_name = gap == 0 ? "0" : fmt("%g%%", gap * 100);
-        cases.push_back({"spheres-" + std::to_string(facets) + " gap " + gap_name, a,
-                         share(scenes::random_sphere(points, 12, 1 + gap)), {RigidTransform::identity()}, repeats, first,
+        cases.push_back({"spheres-" + std::to_string(facets) + " gap " + gap_name,
+                         a,
+                         share(scenes::random_sphere(points, 12, 1 + gap)),
+                         {RigidTransform::identity()},
+                         repeats,
+                         first,
                          1e-5});
         first = false;
       }
     }
     for (double gap : {0.01, 0.1})
-      cases.push_back({"combs gap " + fmt("%g", gap), share(scenes::comb()), share(scenes::interleaved_comb(gap)),
-                       {RigidTransform::identity()}, repeats, gap == 0.01, 1e-4});
+      cases.push_back({"combs gap " + fmt("%g", gap),
+                       share(scenes::comb()),
+                       share(scenes::interleaved_comb(gap)),
+                       {RigidTransform::identity()},
+                       repeats,
+                       gap == 0.01,
+                       1e-4});
     const std::string bunny_path = mesh_dir + "/" + bunny_file;
     if (std::filesystem::exists(bunny_path)) {
       const auto bunny = share(load_mesh(bunny_path));
@@ -587,8 +604,8 @@ int main(int argc, char** argv) {
       const auto rob = share(load_mesh(mesh_dir + "/rob.obj"));
       Vec3 lo, hi;
       bounds(*env, lo, hi);
-      cases.push_back({"env x rob, " + std::to_string(env_poses) + " poses", env, rob, poses_within(*env, env_poses, 5), repeats,
-                       true, 1e-5 * (hi - lo).norm()});
+      cases.push_back({"env x rob, " + std::to_string(env_poses) + " poses", env, rob, poses_within(*env, env_poses, 5),
+                       repeats, true, 1e-5 * (hi - lo).norm()});
     } else {
       std::printf("skipped env vs rob: env.obj / rob.obj not found in %s\n", mesh_dir.c_str());
     }
@@ -614,7 +631,8 @@ int main(int argc, char** argv) {
     std::printf("%s\n", body.c_str());
     const double wall = seconds_since(wall_start);
     if (disagreements > 0)
-      std::printf("!!!!!! PAIR LISTS DISAGREE in %d (source, pose) cases: see the messages above !!!!!!\n", disagreements);
+      std::printf("!!!!!! PAIR LISTS DISAGREE in %d (source, pose) cases: see the messages above !!!!!!\n",
+                  disagreements);
     else
       std::printf("pair lists agree: every boxtree method, FCL volume, GImpact and brute force (where run)\n");
     std::printf("total %.1f s%s\n", wall, quick ? " (--quick)" : "");
@@ -640,7 +658,8 @@ int main(int argc, char** argv) {
             "leaf-leaf pairs (it goes straight to the triangle test), so FCL is slightly favoured.\n"
             "- Times are the queries alone: the sum over the poses of each pose's fastest of "
          << repeats
-         << " runs (trees built before; a tree of a mesh shared by cases is built once). FCL-AABB re-builds b's tree in a's frame at every non-identity pose (FCL's own AABB traversal "
+         << " runs (trees built before; a tree of a mesh shared by cases is built once). FCL-AABB re-builds b's tree "
+            "in a's frame at every non-identity pose (FCL's own AABB traversal "
             "works in one frame; fcl::collide does the same); that is in its time. GImpact = "
             "`btGImpactQuantizedBvh::find_collision` between the two shapes' box sets (what "
             "btGImpactCollisionAlgorithm does for two GImpact meshes) + boxtree's exact `triangles_intersect` on its "
@@ -649,8 +668,10 @@ int main(int argc, char** argv) {
             "room for 0xffff contacts; ODE reports contact points, not facet pairs, and its trimesh-trimesh collider "
             "merges close contacts in a hash table (its overflow warnings are counted in the pairs table) ("
          << peers::ode_configuration() << ").\n"
-         << "- Pairs: all boxtree methods, every FCL volume and GImpact's exact pairs are compared pose by pose with the "
-            "first method's sorted pair list; brute force (all facet pairs, `triangles_intersect`) on the first pose of every case with at "
+         << "- Pairs: all boxtree methods, every FCL volume and GImpact's exact pairs are compared pose by pose with "
+            "the "
+            "first method's sorted pair list; brute force (all facet pairs, `triangles_intersect`) on the first pose "
+            "of every case with at "
             "most 3e7 facet pairs and on further poses within "
          << fmt("%.0e", brute_budget) << " facet pairs per case (spheres-9996 is not brute-forced). Disagreements: "
          << (disagreements ? "**" + std::to_string(disagreements) + " (see the table)**" : std::string("none")) << ".\n"

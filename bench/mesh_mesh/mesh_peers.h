@@ -58,11 +58,11 @@ bool ode_available();
 std::string ode_configuration();
 
 struct OdeResult {
-  std::uint64_t contacts = 0;     // summed over poses
-  std::uint64_t poses_at_cap = 0; // poses where ODE filled the whole contact array
-  std::uint64_t messages = 0;     // ODE's warnings during the queries (silenced, counted)
-  double seconds = 0;             // dCollide: sum over poses of each pose's fastest time
-  double build_seconds = 0;       // mean of the two dGeomTriMeshDataBuildDouble + dCreateTriMesh
+  std::uint64_t contacts = 0;      // summed over poses
+  std::uint64_t poses_at_cap = 0;  // poses where ODE filled the whole contact array
+  std::uint64_t messages = 0;      // ODE's warnings during the queries (silenced, counted)
+  double seconds = 0;              // dCollide: sum over poses of each pose's fastest time
+  double build_seconds = 0;        // mean of the two dGeomTriMeshDataBuildDouble + dCreateTriMesh
 };
 
 class OdeTriMeshPair {

@@ -48,8 +48,8 @@ struct OdeMesh {
       for (int k = 0; k < 3; ++k) indices.push_back(dTriIndex(t[k]));
     const auto start = Clock::now();
     data = dGeomTriMeshDataCreate();
-    dGeomTriMeshDataBuildDouble(data, vertices.data(), 3 * int(sizeof(dReal)), int(mesh.vertices.size()), indices.data(),
-                                int(indices.size()), 3 * int(sizeof(dTriIndex)));
+    dGeomTriMeshDataBuildDouble(data, vertices.data(), 3 * int(sizeof(dReal)), int(mesh.vertices.size()),
+                                indices.data(), int(indices.size()), 3 * int(sizeof(dTriIndex)));
     geom = dCreateTriMesh(nullptr, data, nullptr, nullptr, nullptr);
     build_seconds = since(start);
   }
@@ -94,7 +94,8 @@ OdeResult OdeTriMeshPair::run(const std::vector<RigidTransform>& a_from_b, int r
       rotation[4 * i + 3] = 0;
     }
     dGeomSetRotation(impl_->b.geom, rotation);
-    dGeomSetPosition(impl_->b.geom, dReal(pose.translation.x()), dReal(pose.translation.y()), dReal(pose.translation.z()));
+    dGeomSetPosition(impl_->b.geom, dReal(pose.translation.x()), dReal(pose.translation.y()),
+                     dReal(pose.translation.z()));
     std::vector<double> times;
     int n = 0;
     for (int rep = 0; rep < std::max(1, repeats); ++rep) {

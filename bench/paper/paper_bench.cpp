@@ -69,7 +69,8 @@ CollideResult run_collide(const Method& method, const PairScene& scene, int repe
       QueryStats stats;
       std::uint64_t pairs = 0;
       const auto start = Clock::now();
-      collide<V>(a, b, RigidTransform::identity(), [&](const FacetPair&) { return ++pairs, true; }, &stats);
+      collide<V>(
+          a, b, RigidTransform::identity(), [&](const FacetPair&) { return ++pairs, true; }, &stats);
       times.push_back(std::chrono::duration<double>(Clock::now() - start).count());
       r.bv_tests = stats.volume_tests;
       r.leaf_tests = stats.leaf_tests;
@@ -127,8 +128,8 @@ int main(int argc, char** argv) {
         const Tree<V> tree = build_tree<V>(model.mesh, settings_for(method), &build);
         const TreeStats s = compute_tree_stats(tree);
         for (const LevelStats& l : s.levels)
-          levels << model.name << ',' << s.facets << ',' << method_name(method) << ',' << l.level << ',' << l.nodes << ','
-                 << l.avg_area << ',' << l.avg_volume << '\n';
+          levels << model.name << ',' << s.facets << ',' << method_name(method) << ',' << l.level << ',' << l.nodes
+                 << ',' << l.avg_area << ',' << l.avg_volume << '\n';
         summary << model.name << ',' << s.facets << ',' << method_name(method) << ',' << s.height << ',' << s.plane_cost
                 << ',' << s.plane_cost_mean_width << ',' << build.seconds << '\n';
         return 0;
@@ -141,9 +142,9 @@ int main(int argc, char** argv) {
   std::vector<PairScene> scenes_list;
   for (Real gap : {0.01, 0.05, 0.1, 0.25, 0.5})
     scenes_list.push_back({"combs", 92, gap, scenes::comb(), scenes::interleaved_comb(gap)});
-  const std::vector<std::pair<int, std::size_t>> spheres = quick ? std::vector<std::pair<int, std::size_t>>{{280, 556}}
-                                                                : std::vector<std::pair<int, std::size_t>>{
-                                                                      {280, 556}, {1000, 1996}, {5000, 9996}};
+  const std::vector<std::pair<int, std::size_t>> spheres =
+      quick ? std::vector<std::pair<int, std::size_t>>{{280, 556}}
+            : std::vector<std::pair<int, std::size_t>>{{280, 556}, {1000, 1996}, {5000, 9996}};
   for (const auto& [points, facets] : spheres)
     for (Real gap : {0.0, 0.001, 0.003, 0.01, 0.03, 0.1, 0.2, 0.3})
       scenes_list.push_back({"spheres-" + std::to_string(facets), facets, gap, scenes::random_sphere(points, 11),
@@ -157,8 +158,8 @@ int main(int argc, char** argv) {
     for (const Method& method : methods) {
       const CollideResult r = run_collide(method, scene, repeats);
       results[scene.name][scene.gap][method_name(method)] = r;
-      table << scene.name << ',' << scene.facets << ',' << scene.gap << ',' << method_name(method) << ',' << r.bv_tests << ','
-            << r.leaf_tests << ',' << r.pairs << ',' << r.seconds << ',' << r.build_seconds << '\n';
+      table << scene.name << ',' << scene.facets << ',' << scene.gap << ',' << method_name(method) << ',' << r.bv_tests
+            << ',' << r.leaf_tests << ',' << r.pairs << ',' << r.seconds << ',' << r.build_seconds << '\n';
     }
     if (with_fcl)
       for (const std::string& bv : peers::fcl_bv_names()) {
@@ -173,7 +174,8 @@ int main(int argc, char** argv) {
 
   // Markdown: each pair at its calibrated gap (our aabb count closest to the paper's), all methods.
   std::ofstream md(out_dir + "/table1.md");
-  md << "| pair | calibrated gap | method | volume tests (ours) | paper (aabb / min-box / min-pie) | ratio to paper's same method | "
+  md << "| pair | calibrated gap | method | volume tests (ours) | paper (aabb / min-box / min-pie) | ratio to paper's "
+        "same method | "
         "intersecting pairs | time (ms) |\n|---|---:|---|---:|---|---:|---:|---:|\n";
   for (const PaperRow& row : kPaperTable1) {
     auto it = results.find(row.pair);
@@ -187,11 +189,15 @@ int main(int argc, char** argv) {
       if (diff < best_diff) best_diff = diff, best_gap = gap;
     }
     for (const auto& [name, r] : it->second[best_gap]) {
-      const long paper = name == "aabb" ? row.aabb : name == "obb-min" ? row.obb_min : name == "pie-min" ? row.pie_min : 0;
+      const long paper = name == "aabb"      ? row.aabb
+                         : name == "obb-min" ? row.obb_min
+                         : name == "pie-min" ? row.pie_min
+                                             : 0;
       char ratio[32] = "";
       if (paper > 0) std::snprintf(ratio, sizeof ratio, "%.2f", double(r.bv_tests) / double(paper));
       md << "| " << row.pair << " | " << best_gap << " | " << name << " | " << r.bv_tests << " | " << row.aabb << " / "
-         << row.obb_min << " / " << row.pie_min << " | " << ratio << " | " << r.pairs << " | " << r.seconds * 1e3 << " |\n";
+         << row.obb_min << " / " << row.pie_min << " | " << ratio << " | " << r.pairs << " | " << r.seconds * 1e3
+         << " |\n";
     }
   }
   // Every gap: our best method against FCL's best hierarchy (volume tests; lower is better).

@@ -77,9 +77,11 @@ void run_planar(std::ofstream& csv, std::size_t max_n, bool quick) {
           << stats.build_seconds << "," << ns << "," << double(qstats.nodes_visited) / queries << "," << max_nodes
           << "\n";
       csv.flush();
-      std::printf("planar %-10s n=%8zu height=%3d rounds=%3zu stabbing=%3zu min12p/(m+3)=%.2f build=%.3fs locate=%.0fns (%zu)\n",
-                  generator.c_str(), cells.size(), tree.height(), stats.rounds.size(), stabbing, min_fraction,
-                  stats.build_seconds, ns, checksum % 10);
+      std::printf(
+          "planar %-10s n=%8zu height=%3d rounds=%3zu stabbing=%3zu min12p/(m+3)=%.2f build=%.3fs locate=%.0fns "
+          "(%zu)\n",
+          generator.c_str(), cells.size(), tree.height(), stats.rounds.size(), stabbing, min_fraction,
+          stats.build_seconds, ns, checksum % 10);
       std::fflush(stdout);
     }
   }
@@ -134,10 +136,13 @@ StabbingResult stabbing(const Tree<V>& tree, const std::vector<Line>& lines, std
     ray.origin = lines[i].origin;
     ray.direction = lines[i].direction;
     QueryStats stats;
-    ray_all_hits(tree, ray, [](const RayHit&) { return true; }, &stats);
+    ray_all_hits(
+        tree, ray, [](const RayHit&) { return true; }, &stats);
     out.max_all = std::max(out.max_all, stats.nodes_visited);
-    if (i < witness_count) out.max_witness = std::max(out.max_witness, stats.nodes_visited);
-    else sum += stats.nodes_visited;
+    if (i < witness_count)
+      out.max_witness = std::max(out.max_witness, stats.nodes_visited);
+    else
+      sum += stats.nodes_visited;
   }
   out.mean_random = double(sum) / double(std::max<std::size_t>(1, lines.size() - witness_count));
   return out;
@@ -154,8 +159,8 @@ void measure_all_methods(std::ofstream& csv, const std::string& construction, in
       using V = typename decltype(tag)::type;
       return stabbing(build_tree<V>(shared), lines, witnesses.size());
     });
-    csv << construction << "," << n << "," << mesh.facet_count() << "," << name << "," << r.height << ","
-        << r.max_all << "," << r.max_witness << "," << r.mean_random << "," << note << "\n";
+    csv << construction << "," << n << "," << mesh.facet_count() << "," << name << "," << r.height << "," << r.max_all
+        << "," << r.max_witness << "," << r.mean_random << "," << note << "\n";
     std::printf("lower %-9s n=%4d facets=%6zu %-8s height=%3d stab=%5llu witness=%5llu mean=%.1f %s\n",
                 construction.c_str(), n, mesh.facet_count(), name.c_str(), r.height, (unsigned long long)r.max_all,
                 (unsigned long long)r.max_witness, r.mean_random, note.c_str());
@@ -242,16 +247,19 @@ void compare_on_terrain(std::ofstream& csv, const std::string& method, const std
   std::vector<QueryStats> vertical(count), random_rays(count), closest(count), midphase(count);
   for (int i = 0; i < count; ++i) {
     Ray ray;
-    ray.origin = Vec3(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()), box.max.z() + 1);
+    ray.origin =
+        Vec3(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()), box.max.z() + 1);
     ray.direction = -Vec3::UnitZ();
-    ray_all_hits(tree, ray, [](const RayHit&) { return true; }, &vertical[std::size_t(i)]);
+    ray_all_hits(
+        tree, ray, [](const RayHit&) { return true; }, &vertical[std::size_t(i)]);
     ray_closest_hit(tree, ray, &closest[std::size_t(i)]);
     Ray any;
     const Vec3 inside(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()),
                       random.uniform(box.min.z(), box.max.z()));
     any.origin = box.center() + box.extent().norm() * random.unit_vector();
     any.direction = (inside - any.origin).normalized();
-    ray_all_hits(tree, any, [](const RayHit&) { return true; }, &random_rays[std::size_t(i)]);
+    ray_all_hits(
+        tree, any, [](const RayHit&) { return true; }, &random_rays[std::size_t(i)]);
     // Bodies of the drop scene are 0.25-0.55 m, dropped over the middle |x|, |y| <= 11 m.
     const Real size = random.uniform(0.25, 0.55);
     const Vec3 half = Vec3(random.uniform(0.5, 1), random.uniform(0.5, 1), random.uniform(0.5, 1)) * size;
@@ -261,8 +269,9 @@ void compare_on_terrain(std::ofstream& csv, const std::string& method, const std
     down.direction = -Vec3::UnitZ();
     const auto hit = ray_closest_hit(tree, down);
     const Vec3 centre(c.x(), c.y(), (hit ? down.origin.z() - hit->t : 0) + half.z() * random.uniform(-0.2, 1));
-    query_overlap(tree, Aabb::from_points(centre - half, centre + half), [](FacetId) { return true; },
-                  &midphase[std::size_t(i)], FacetTest::leaf_volume);
+    query_overlap(
+        tree, Aabb::from_points(centre - half, centre + half), [](FacetId) { return true; }, &midphase[std::size_t(i)],
+        FacetTest::leaf_volume);
   }
   report("vertical_all_hits", vertical);
   report("vertical_closest", closest);

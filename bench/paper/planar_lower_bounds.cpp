@@ -131,9 +131,11 @@ TangentPolytope make_tangent_polytope(int n) {
         for (std::size_t s = 0; s + 1 < ring.size(); ++s)
           out.mesh.triangles.push_back({VertexId(pivot), VertexId(ring[s]), VertexId(ring[s + 1])});
       }
-  for (const IVec& p : points) out.mesh.vertices.push_back(Vec3(p.x.convert_to<double>(), p.y.convert_to<double>(), p.z.convert_to<double>()));
+  for (const IVec& p : points)
+    out.mesh.vertices.push_back(Vec3(p.x.convert_to<double>(), p.y.convert_to<double>(), p.z.convert_to<double>()));
   out.segments_are_edges = true;
-  for (int k = 0; k < n; ++k) out.segments_are_edges = out.segments_are_edges && is_hull_edge(points, std::size_t(k), std::size_t(n + k));
+  for (int k = 0; k < n; ++k)
+    out.segments_are_edges = out.segments_are_edges && is_hull_edge(points, std::size_t(k), std::size_t(n + k));
   return out;
 }
 

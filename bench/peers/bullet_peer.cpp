@@ -9,8 +9,8 @@
 #include "boxtree/error.h"
 
 #if BOXTREE_BENCH_HAVE_BULLET
-#include <btBulletCollisionCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
+#include <btBulletCollisionCommon.h>
 #endif
 
 namespace boxtree::peers {

@@ -25,8 +25,8 @@ bool bullet_available();
 const char* bullet_version();
 
 struct BulletBvhBytes {
-  std::size_t quantized_nodes = 0;  // m_quantizedContiguousNodes: the tree walked by queries
-  std::size_t subtree_headers = 0;  // m_SubtreeHeaders: cache-friendly subtree bounds
+  std::size_t quantized_nodes = 0;        // m_quantizedContiguousNodes: the tree walked by queries
+  std::size_t subtree_headers = 0;        // m_SubtreeHeaders: cache-friendly subtree bounds
   std::size_t retained_build_arrays = 0;  // leaf (and unquantized) node arrays still held after the build
   std::size_t total() const { return quantized_nodes + subtree_headers + retained_build_arrays; }
 };

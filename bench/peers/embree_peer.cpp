@@ -62,7 +62,9 @@ struct EmbreeScene::Impl {
 };
 
 bool embree_available() { return true; }
-const char* embree_version() { return "Embree " RTC_VERSION_STRING " (Debian libembree-dev, threads=1, build quality medium)"; }
+const char* embree_version() {
+  return "Embree " RTC_VERSION_STRING " (Debian libembree-dev, threads=1, build quality medium)";
+}
 
 EmbreeScene::EmbreeScene(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
@@ -75,7 +77,8 @@ EmbreeScene::EmbreeScene(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
     for (VertexId v : t) m.indices.push_back(v);
 
   m.device = rtcNewDevice("threads=1");
-  if (!m.device) throw Error("embree: rtcNewDevice failed (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+  if (!m.device)
+    throw Error("embree: rtcNewDevice failed (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
   rtcSetDeviceErrorFunction(m.device, on_error, &m.error);
   rtcSetDeviceMemoryMonitorFunction(m.device, on_memory, &m.memory);
   {  // one-time initialisation (task arena, kernels) on a one-triangle scene, not timed or counted

@@ -31,8 +31,8 @@ class EmbreeScene {
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   double build_seconds() const;
-  std::size_t bytes() const;       // held by the scene after the build (memory monitor)
-  std::size_t peak_bytes() const;  // the most held at once during the build
+  std::size_t bytes() const;            // held by the scene after the build (memory monitor)
+  std::size_t peak_bytes() const;       // the most held at once during the build
   std::size_t mesh_copy_bytes() const;  // the shared float vertex / uint32 index buffers
 
   // Closest hit of origin + t * direction for t in [0, t_max] (rtcIntersect1): t, or +infinity.

@@ -147,8 +147,8 @@ FclResult fcl_collide_poses(const TriangleMesh& a, const TriangleMesh& b, const 
 
 std::vector<std::string> fcl_bv_names() { return {"AABB", "OBB", "RSS", "OBBRSS", "kIOS"}; }
 
-FclResult fcl_collide(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b, const std::string& bv,
-                      int repeats) {
+FclResult fcl_collide(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b,
+                      const std::string& bv, int repeats) {
   using namespace fcl::detail;
   if (bv == "AABB") return run<fcl::AABBd, MeshCollisionTraversalNode<fcl::AABBd>>(a, b, a_from_b, repeats);
   if (bv == "OBB") return run<fcl::OBBd, MeshCollisionTraversalNodeOBB<double>>(a, b, a_from_b, repeats);

@@ -24,8 +24,8 @@ struct FclResult {
 };
 
 // bv: "AABB", "OBB", "RSS", "OBBRSS", "kIOS". b is placed by a_from_b.
-FclResult fcl_collide(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b, const std::string& bv,
-                      int repeats);
+FclResult fcl_collide(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b,
+                      const std::string& bv, int repeats);
 
 // Many poses of b against a (bench/mesh_mesh): both models are built once (build_seconds: the
 // mean of the two builds); counters and pairs are summed over the poses; seconds = the sum over

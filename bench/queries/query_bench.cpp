@@ -21,9 +21,9 @@
 // (on the first 1,000 boxes, against boxtree's exact triangle query, itself cross-checked with
 // brute force in the tests: must be 0).
 #include <algorithm>
+#include <cstdio>
 #include <functional>
 #include <limits>
-#include <cstdio>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -69,7 +69,8 @@ std::vector<Aabb> resting_boxes(const boxtree::PackedAabbTree& tree, int cells, 
     const auto hit = boxtree::ray_closest_hit(tree, down);
     if (!hit) continue;
     const Vec3 center(x, y, bounds.max.z() + 1 - hit->t);
-    const Vec3 half(cell * random.uniform(0.75, 2.25), cell * random.uniform(0.75, 2.25), cell * random.uniform(0.2, 2));
+    const Vec3 half(cell * random.uniform(0.75, 2.25), cell * random.uniform(0.75, 2.25),
+                    cell * random.uniform(0.2, 2));
     boxes.push_back(Aabb{center - half, center + half});
   }
   return boxes;
@@ -142,8 +143,8 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::vector<Row> rows;
-    std::vector<std::vector<std::string>> cells{
-        {"terrain", "facets", "engine", "µs / query", "candidates / query", "missed", "ratio time", "ratio candidates"}};
+    std::vector<std::vector<std::string>> cells{{"terrain", "facets", "engine", "µs / query", "candidates / query",
+                                                 "missed", "ratio time", "ratio candidates"}};
     constexpr Real kSize = 100;
     for (const int n : cell_counts) {
       auto mesh = std::make_shared<const boxtree::TriangleMesh>(boxtree::make_terrain(n, n, 7, kSize));
@@ -185,8 +186,8 @@ int main(int argc, char** argv) {
       for (const Run* run : {&bullet_run, &packed_run, &exact_run}) {
         const bool peer = run == &bullet_run;
         cells.push_back({case_name, with_commas(mesh->facet_count()), run->label,
-                         format("%.3f", run->us_per_query(boxes.size())), format("%.1f", double(run->candidates) / n_boxes),
-                         std::to_string(run->missed_queries),
+                         format("%.3f", run->us_per_query(boxes.size())),
+                         format("%.1f", double(run->candidates) / n_boxes), std::to_string(run->missed_queries),
                          peer ? "" : format("%.2f", run->seconds / bullet_run.seconds),
                          peer ? "" : format("%.2f", double(run->candidates) / double(bullet_run.candidates))});
         if (peer) continue;
@@ -209,7 +210,9 @@ int main(int argc, char** argv) {
           "the adapters hold (16-bit boxes, 22 B/facet); `aabb-exact`: the exact `Tree<Aabb>` (double boxes). "
           "Bullet: `reportAabbOverlappingNodex` of a quantized `btBvhTriangleMeshShape`.\n"
           "- *missed*: of the first 1,000 boxes, those where a facet whose triangle meets the box was not reported "
-          "(must be 0). Time: the fastest of " << rounds << " passes per engine, the engines taking turns. Ratios: boxtree / Bullet (time: lower is better).\n\n"
+          "(must be 0). Time: the fastest of "
+       << rounds
+       << " passes per engine, the engines taking turns. Ratios: boxtree / Bullet (time: lower is better).\n\n"
        << table(cells, true) << "\n";
     if (!json_path.empty()) boxtree::bench::write_json(json_path, rows);
     if (!markdown_path.empty()) boxtree::bench::write_text(markdown_path, md.str());

@@ -44,8 +44,8 @@ nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 
 Row compare(std::string section, std::string case_name, std::string metric, std::string method, double boxtree,
             std::string peer, double peer_value) {
-  Row r{std::move(section), std::move(case_name), std::move(metric), std::move(method), boxtree, std::move(peer),
-        peer_value, std::nullopt};
+  Row r{std::move(section), std::move(case_name), std::move(metric), std::move(method), boxtree,
+        std::move(peer),    peer_value,           std::nullopt};
   if (peer_value != 0 && std::isfinite(peer_value) && std::isfinite(boxtree)) r.ratio = boxtree / peer_value;
   return r;
 }
@@ -81,8 +81,10 @@ std::string machine_markdown(const std::string& peers) {
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
   s << "- Machine: " << (cpu.empty() ? "unknown CPU" : cpu) << ", " << std::thread::hardware_concurrency()
-    << " hardware threads, " << mem << " RAM; load average at start: " << load << " (a shared machine: compare the ratios, not the absolute figures)\n";
-  s << "- Compiler: " << BOXTREE_BENCH_COMPILER << ", flags `" << BOXTREE_BENCH_FLAGS << "`; every engine runs single-threaded\n";
+    << " hardware threads, " << mem << " RAM; load average at start: " << load
+    << " (a shared machine: compare the ratios, not the absolute figures)\n";
+  s << "- Compiler: " << BOXTREE_BENCH_COMPILER << ", flags `" << BOXTREE_BENCH_FLAGS
+    << "`; every engine runs single-threaded\n";
   s << "- Peers: " << peers << "\n";
   s << "- Date: " << date << "\n";
   return s.str();
@@ -113,8 +115,10 @@ std::string table(const std::vector<std::vector<std::string>>& cells, bool markd
   for (std::size_t r = 0; r < cells.size(); ++r) {
     for (std::size_t c = 0; c < cells[r].size(); ++c) {
       const std::string& cell = cells[r][c];
-      if (markdown) out << "| " << cell << " ";
-      else out << (c ? "  " : "") << cell << std::string(width[c] - cell.size(), ' ');
+      if (markdown)
+        out << "| " << cell << " ";
+      else
+        out << (c ? "  " : "") << cell << std::string(width[c] - cell.size(), ' ');
     }
     out << (markdown ? "|\n" : "\n");
     if (markdown && r == 0) {

@@ -50,9 +50,9 @@ using boxtree::Real;
 using boxtree::Vec3;
 using boxtree::bench::Clock;
 using boxtree::bench::format;
+using boxtree::bench::Row;
 using boxtree::bench::table;
 using boxtree::bench::with_commas;
-using boxtree::bench::Row;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kRelativeTolerance = 1e-5;
@@ -226,14 +226,15 @@ std::unique_ptr<RayEngine> make_boxtree_engine(const std::shared_ptr<const boxtr
   return boxtree::with_method(method, [&](auto tag) -> std::unique_ptr<RayEngine> {
     using V = typename decltype(tag)::type;
     if constexpr (std::is_same_v<V, boxtree::Aabb>) {
-      if (exact) return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(name, [&] { return boxtree::build_tree<V>(mesh); });
+      if (exact)
+        return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(name, [&] { return boxtree::build_tree<V>(mesh); });
       return std::make_unique<BoxtreeEngine<boxtree::PackedAabbTree>>(
           name, [&] { return boxtree::PackedAabbTree(boxtree::build_tree<V>(mesh)); });
     } else if constexpr (boxtree::is_pie_slice_v<V>) {
       const auto build = [&] { return boxtree::build_tree<V>(mesh, boxtree::settings_for(method)); };
       if (exact) return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(name, build);
-      return std::make_unique<BoxtreeEngine<boxtree::PackedPrismTree>>(name,
-                                                                        [&] { return boxtree::PackedPrismTree(build()); });
+      return std::make_unique<BoxtreeEngine<boxtree::PackedPrismTree>>(
+          name, [&] { return boxtree::PackedPrismTree(build()); });
     } else {
       if (exact) throw std::runtime_error("'" + name + "': -exact applies to aabb and the plain pie-slice methods");
       return std::make_unique<BoxtreeEngine<boxtree::Tree<V>>>(
@@ -310,10 +311,11 @@ int main(int argc, char** argv) {
   app.add_option("--json", json_path, "write the result rows (JSON array) here");
   app.add_option("--markdown", markdown_path, "write the section's markdown fragment here");
   app.add_option("--meshes", meshes_dir, "directory of the shared meshes (stanford_bunny.obj)");
-  app.add_option("--methods", methods_list,
-                 "comma-separated boxtree methods (default aabb,aabb-batch,obb-min,obb-all+aabb@2; --quick "
-                 "aabb,aabb-batch,obb-all+aabb@2); the first is the reference of the agreement counts. Bench-only names: "
-                 "aabb-exact (the exact Tree<Aabb>), aabb-batch (ray_closest_hits over all rays in one call)");
+  app.add_option(
+      "--methods", methods_list,
+      "comma-separated boxtree methods (default aabb,aabb-batch,obb-min,obb-all+aabb@2; --quick "
+      "aabb,aabb-batch,obb-all+aabb@2); the first is the reference of the agreement counts. Bench-only names: "
+      "aabb-exact (the exact Tree<Aabb>), aabb-batch (ray_closest_hits over all rays in one call)");
   app.add_option("--rays", ray_count, "rays from outside (default 1,000,000; --quick 20,000)");
   app.add_option("--volume-rays", volume_ray_count, "rays through the volume (default a quarter of --rays)");
   app.add_option("--terrain-cells", terrain_cells, "terrain cells per side (default 512; --quick 128)");
@@ -321,7 +323,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (ray_count == 0) ray_count = quick ? 20000 : 1000000;
   if (volume_ray_count == 0) volume_ray_count = std::max<std::size_t>(1, ray_count / 4);
-  if (methods_list.empty()) methods_list = quick ? "aabb,aabb-batch,obb-all+aabb@2" : "aabb,aabb-batch,obb-min,obb-all+aabb@2";
+  if (methods_list.empty())
+    methods_list = quick ? "aabb,aabb-batch,obb-all+aabb@2" : "aabb,aabb-batch,obb-min,obb-all+aabb@2";
   if (terrain_cells == 0) terrain_cells = quick ? 128 : 512;
   std::vector<std::string> methods;
   {
@@ -342,42 +345,53 @@ int main(int argc, char** argv) {
 
   std::vector<Case> cases;
   {
-    auto terrain = std::make_shared<const boxtree::TriangleMesh>(boxtree::make_terrain(terrain_cells, terrain_cells, seed));
+    auto terrain =
+        std::make_shared<const boxtree::TriangleMesh>(boxtree::make_terrain(terrain_cells, terrain_cells, seed));
     const std::size_t facets = terrain->facet_count();
     cases.push_back({"terrain-" + std::to_string((facets + 500) / 1000) + "k",
-                     "fractal terrain, make_terrain(" + std::to_string(terrain_cells) + ", " + std::to_string(terrain_cells) +
-                         "), " + with_commas(facets) + " facets",
+                     "fractal terrain, make_terrain(" + std::to_string(terrain_cells) + ", " +
+                         std::to_string(terrain_cells) + "), " + with_commas(facets) + " facets",
                      terrain});
   }
   const std::string bunny_path = meshes_dir + "/stanford_bunny.obj";
   try {
     auto bunny = std::make_shared<const boxtree::TriangleMesh>(boxtree::load_mesh(bunny_path));
-    cases.push_back({"bunny", "Stanford bunny (" + bunny_path + "), " + with_commas(bunny->facet_count()) + " facets", bunny});
+    cases.push_back(
+        {"bunny", "Stanford bunny (" + bunny_path + "), " + with_commas(bunny->facet_count()) + " facets", bunny});
   } catch (const std::exception& e) {
     std::printf("skipping the bunny: %s\n", e.what());
   }
   {
     auto sphere = std::make_shared<const boxtree::TriangleMesh>(boxtree::make_uv_sphere(100, 51, 1.0));
-    cases.push_back({"sphere-10k", "UV sphere make_uv_sphere(100, 51), " + with_commas(sphere->facet_count()) + " facets", sphere});
+    cases.push_back(
+        {"sphere-10k", "UV sphere make_uv_sphere(100, 51), " + with_commas(sphere->facet_count()) + " facets", sphere});
   }
 
   std::string peers = std::string(boxtree::peers::bullet_version()) + "; " + boxtree::peers::embree_version() + "; " +
                       boxtree::peers::ode_version();
-  if (!boxtree::peers::embree_available()) std::printf("Embree peer skipped: not found at configure time (Debian: libembree-dev)\n");
+  if (!boxtree::peers::embree_available())
+    std::printf("Embree peer skipped: not found at configure time (Debian: libembree-dev)\n");
   std::vector<Row> rows;
   std::ostringstream md;
   md << "## Rays: closest hit, boxtree vs Bullet, Embree, ODE\n\n" << boxtree::bench::machine_markdown(peers);
   md << "- " << with_commas(ray_count) << " rays from outside, " << with_commas(volume_ray_count)
-     << " through the volume. *outside*: origins on a sphere of twice the bounding radius, aimed at uniform points of the "
+     << " through the volume. *outside*: origins on a sphere of twice the bounding radius, aimed at uniform points of "
+        "the "
         "bounding box; *volume*: origins uniform in the bounding box, uniform directions. Unit directions, segments "
         "t in [0, t_max] past the box, the same for every engine; one warm-up pass over 2,000 rays excluded.\n"
-        "- boxtree: `ray_closest_hit` on `Tree<V>`, and for `aabb` on `PackedAabbTree` (what the engine adapters hold; `aabb-exact` is the exact `Tree<Aabb>`), double precision, watertight triangle test; `aabb-batch`: `ray_closest_hits` on the same packed tree, all the rays in one call (eight rays' walks take turns node by node, so that one ray's loads overlap the others' work: the same answers; a batch against the peers' one-ray calls, Embree's own batch calls not measured). Bullet: "
+        "- boxtree: `ray_closest_hit` on `Tree<V>`, and for `aabb` on `PackedAabbTree` (what the engine adapters hold; "
+        "`aabb-exact` is the exact `Tree<Aabb>`), double precision, watertight triangle test; `aabb-batch`: "
+        "`ray_closest_hits` on the same packed tree, all the rays in one call (eight rays' walks take turns node by "
+        "node, so that one ray's loads overlap the others' work: the same answers; a batch against the peers' one-ray "
+        "calls, Embree's own batch calls not measured). Bullet: "
         "`btBvhTriangleMeshShape::performRaycast` (quantized BVH, `btTriangleRaycastCallback` keeping the closest "
         "hit; the midphase + triangle path of `btCollisionWorld::rayTest` without its broadphase). Embree: "
         "`rtcIntersect1`, device \"threads=1\", static scene, default (medium) build quality. ODE: `dCollide` of a "
         "`dGeomRay` (closest-hit mode) with a `dTriMesh`.\n"
-        "- *disagree*: rays where the engine and boxtree " + methods.front() + " differ (hit vs miss, or t beyond 1e-5 relative).\n"
-        "- Ratio = boxtree rays/s / peer rays/s: above 1 boxtree is faster.\n\n";
+        "- *disagree*: rays where the engine and boxtree " +
+            methods.front() +
+            " differ (hit vs miss, or t beyond 1e-5 relative).\n"
+            "- Ratio = boxtree rays/s / peer rays/s: above 1 boxtree is faster.\n\n";
 
   for (const Case& c : cases) {
     const Bounds box = bounds_of(*c.mesh);
@@ -390,7 +404,8 @@ int main(int argc, char** argv) {
     if (boxtree::peers::ode_available())
       peer_engines.push_back(std::make_unique<PeerEngine<boxtree::peers::OdeTriMeshRays>>(*c.mesh, "ode"));
     for (int set = 0; set < 2; ++set) {
-      const RaySet rays = set == 0 ? outside_rays(box, ray_count, seed + 17) : volume_rays(box, volume_ray_count, seed + 29);
+      const RaySet rays =
+          set == 0 ? outside_rays(box, ray_count, seed + 17) : volume_rays(box, volume_ray_count, seed + 29);
       const std::string case_name = c.name + "/" + rays.name;
       std::vector<EngineRun> runs, peer_runs;
       for (auto& e : boxtree_engines) runs.push_back(e->run(rays));
@@ -400,8 +415,9 @@ int main(int argc, char** argv) {
         int shown = 0;
         for (std::size_t i = 0; i < p.t.size() && shown < dump; ++i) {
           const double a = runs.front().t[i], b = p.t[i];
-          const bool differ = std::isfinite(a) != std::isfinite(b) ||
-                              (std::isfinite(a) && std::abs(a - b) > kRelativeTolerance * std::max(std::abs(a), std::abs(b)));
+          const bool differ =
+              std::isfinite(a) != std::isfinite(b) ||
+              (std::isfinite(a) && std::abs(a - b) > kRelativeTolerance * std::max(std::abs(a), std::abs(b)));
           if (!differ) continue;
           ++shown;
           std::printf("  %s ray %zu: boxtree t %.9g, %s t %.9g\n", case_name.c_str(), i, a, p.engine.c_str(), b);
@@ -409,13 +425,14 @@ int main(int argc, char** argv) {
       }
       // Absolute figures.
       const EngineRun& reference = runs.front();
-      std::vector<std::vector<std::string>> abs{{"engine", "build s", "Mrays/s", "hits", "disagree (hit/miss + t)",
-                                                 "nodes/ray", "tri tests/ray"}};
+      std::vector<std::vector<std::string>> abs{
+          {"engine", "build s", "Mrays/s", "hits", "disagree (hit/miss + t)", "nodes/ray", "tri tests/ray"}};
       auto add_abs = [&](const EngineRun& r) {
         const Disagreement d = disagreement(reference.t, r.t);
         const double n = double(r.t.size());
         abs.push_back({r.label(), format("%.3f", r.build_seconds), format("%.3f", r.rays_per_second() / 1e6),
-                       with_commas(r.hits), with_commas(d.total()) + " (" + with_commas(d.hit_miss) + " + " + with_commas(d.distance) + ")",
+                       with_commas(r.hits),
+                       with_commas(d.total()) + " (" + with_commas(d.hit_miss) + " + " + with_commas(d.distance) + ")",
                        r.engine == "boxtree" ? format("%.1f", double(r.stats.nodes_visited) / n) : "",
                        r.engine == "boxtree" ? format("%.1f", double(r.stats.leaf_tests) / n) : ""});
       };
@@ -431,19 +448,20 @@ int main(int argc, char** argv) {
           line.push_back(format("%.2fx", r.rays_per_second() / p.rays_per_second()));
           rows.push_back(boxtree::bench::compare("rays", case_name, kThroughputMetric, r.method, r.rays_per_second(),
                                                  json_peer(p.engine), p.rays_per_second()));
-          Row agree = boxtree::bench::compare("rays", case_name, kDisagreeMetric, r.method, double(self.total()), json_peer(p.engine),
-                                              double(disagreement(r.t, p.t).total()));
+          Row agree = boxtree::bench::compare("rays", case_name, kDisagreeMetric, r.method, double(self.total()),
+                                              json_peer(p.engine), double(disagreement(r.t, p.t).total()));
           agree.ratio.reset();
           rows.push_back(agree);
         }
         ratios.push_back(line);
       }
-      const std::string title = c.name + ", " + rays.name + " rays: " + c.description + "; " + with_commas(rays.origins.size()) +
-                                " rays, t_max " + format("%.4g", rays.t_max);
+      const std::string title = c.name + ", " + rays.name + " rays: " + c.description + "; " +
+                                with_commas(rays.origins.size()) + " rays, t_max " + format("%.4g", rays.t_max);
       std::printf("\n%s\n%s\nthroughput ratio boxtree / peer (higher: boxtree faster)\n%s", title.c_str(),
                   table(abs, false).c_str(), table(ratios, false).c_str());
       std::fflush(stdout);
-      md << "### " << title << "\n\n" << table(abs, true) << "\nThroughput ratio boxtree / peer (above 1: boxtree faster):\n\n"
+      md << "### " << title << "\n\n"
+         << table(abs, true) << "\nThroughput ratio boxtree / peer (above 1: boxtree faster):\n\n"
          << table(ratios, true) << "\n";
     }
   }

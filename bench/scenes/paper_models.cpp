@@ -66,7 +66,7 @@ namespace {
 constexpr Real kToothWidth = 1, kToothLength = 5, kSpacing = 3, kSpine = 1, kDepth = 2;
 constexpr int kTeeth = 6;
 constexpr Real kWidth = (kTeeth - 1) * kSpacing + kToothWidth;  // 16
-constexpr Real kLength = kSpine + kToothLength;                  // 6
+constexpr Real kLength = kSpine + kToothLength;                 // 6
 
 // Extrudes a counter-clockwise polygon (with a triangulation of it) along z into a closed solid.
 TriangleMesh extrude(const std::vector<Eigen::Vector2d>& polygon, const std::vector<Triangle>& cap, Real depth) {
@@ -94,8 +94,8 @@ TriangleMesh extrude(const std::vector<Eigen::Vector2d>& polygon, const std::vec
 //   spine:  (P0, P1, t0) and the fan (P0, t_i, t_i+1) over the spine-top corners t0..t9;
 //   the outer teeth with the spine ends as convex quads; each middle tooth as a rectangle.
 TriangleMesh comb() {
-  std::vector<Eigen::Vector2d> poly = {{0, 0}, {kWidth, 0}, {kWidth, kLength}, {kWidth - kToothWidth, kLength},
-                                       {kWidth - kToothWidth, kSpine}};
+  std::vector<Eigen::Vector2d> poly = {
+      {0, 0}, {kWidth, 0}, {kWidth, kLength}, {kWidth - kToothWidth, kLength}, {kWidth - kToothWidth, kSpine}};
   std::vector<VertexId> spine_top = {4};
   std::vector<Triangle> cap = {{1, 2, 3}, {1, 3, 4}};
   for (int k = kTeeth - 2; k >= 1; --k) {
@@ -134,10 +134,13 @@ TriangleMesh lathe(const std::vector<Eigen::Vector2d>& profile, int segments, Re
   mesh.vertices.emplace_back(0, 0, z_bottom);
   for (const auto& p : profile)
     for (int s = 0; s < segments; ++s)
-      mesh.vertices.emplace_back(p.x() * std::cos(2 * pi * s / segments), p.x() * std::sin(2 * pi * s / segments), p.y());
+      mesh.vertices.emplace_back(p.x() * std::cos(2 * pi * s / segments), p.x() * std::sin(2 * pi * s / segments),
+                                 p.y());
   mesh.vertices.emplace_back(0, 0, z_top);
   const VertexId top = VertexId(mesh.vertices.size() - 1);
-  auto id = [&](std::size_t ring, int s) { return VertexId(1 + ring * std::size_t(segments) + std::size_t(s % segments)); };
+  auto id = [&](std::size_t ring, int s) {
+    return VertexId(1 + ring * std::size_t(segments) + std::size_t(s % segments));
+  };
   for (int s = 0; s < segments; ++s) mesh.triangles.push_back({0, id(0, s + 1), id(0, s)});
   for (std::size_t r = 0; r + 1 < profile.size(); ++r)
     for (int s = 0; s < segments; ++s) {

@@ -59,7 +59,8 @@ struct Measure {
   double measured_steps = 1;
 };
 
-// after - before over the measured steps: seconds per step; calls and contacts summed (Measure::measured_steps divides them).
+// after - before over the measured steps: seconds per step; calls and contacts summed (Measure::measured_steps divides
+// them).
 std::vector<demo::Simulation::PairKindTime> per_step(const std::vector<demo::Simulation::PairKindTime>& before,
                                                      const std::vector<demo::Simulation::PairKindTime>& after,
                                                      double steps) {
@@ -155,8 +156,9 @@ void write_breakdown(std::ostringstream& md, const std::string& engine, const Co
         md << " |";
         continue;
       }
-      std::snprintf(buf, sizeof buf, " %.3f (%.0f, %.0f, %.0f) |", 1e3 * k->seconds, double(k->calls) / m.measured_steps,
-                    double(k->contacts) / m.measured_steps, double(k->triangles) / m.measured_steps);
+      std::snprintf(buf, sizeof buf, " %.3f (%.0f, %.0f, %.0f) |", 1e3 * k->seconds,
+                    double(k->calls) / m.measured_steps, double(k->contacts) / m.measured_steps,
+                    double(k->triangles) / m.measured_steps);
       md << buf;
     }
     const auto* base = find(runs[0].second, kind);
@@ -177,7 +179,8 @@ void write_breakdown(std::ostringstream& md, const std::string& engine, const Co
     md << buf;
   }
   for (std::size_t r = 1; r < runs.size(); ++r) {
-    std::snprintf(buf, sizeof buf, " **%.2f** |", runs[0].second.terrain_ms > 0 ? runs[r].second.terrain_ms / runs[0].second.terrain_ms : 0.0);
+    std::snprintf(buf, sizeof buf, " **%.2f** |",
+                  runs[0].second.terrain_ms > 0 ? runs[r].second.terrain_ms / runs[0].second.terrain_ms : 0.0);
     md << buf;
   }
   md << "\n";
@@ -224,7 +227,8 @@ int main(int argc, char** argv) {
   if (!only_bodies.empty()) {
     std::vector<Config> chosen;
     for (const Config& config : configs)
-      if (std::find(only_bodies.begin(), only_bodies.end(), config.bodies) != only_bodies.end()) chosen.push_back(config);
+      if (std::find(only_bodies.begin(), only_bodies.end(), config.bodies) != only_bodies.end())
+        chosen.push_back(config);
     if (chosen.empty()) {
       std::fprintf(stderr, "drop_bench: --bodies matches no scene (100, 500, 1000, 2000; 60 with --quick)\n");
       return 2;
@@ -287,7 +291,8 @@ int main(int argc, char** argv) {
                        {"bodies_fallen_through", double(ours.fell_through), double(builtin.fell_through)},
                        {"build_seconds", ours.build_seconds, builtin.build_seconds}};
         for (const auto& m : metrics) {
-          if (std::string(m.metric) == "terrain_collide_ms_per_step" && (ours.breakdown.empty() || builtin.breakdown.empty()))
+          if (std::string(m.metric) == "terrain_collide_ms_per_step" &&
+              (ours.breakdown.empty() || builtin.breakdown.empty()))
             continue;
           rows.push_back({{"section", "simulation"},
                           {"case", case_name},
@@ -298,16 +303,17 @@ int main(int argc, char** argv) {
                           {"peer_value", m.theirs},
                           {"ratio", ratio(m.ours, m.theirs)}});
         }
-        std::snprintf(buf, sizeof buf,
-                      "| %s | %d^2 | %d | boxtree %s | %.1f | %.0f | %.3f | %.3f | %.2f | %d | %.2f | %.2f | %.2f | %.2f |\n",
-                      engine.c_str(), config.cells, config.bodies, method.c_str(), ours.contacts, ours.triangles,
-                      ours.collision_ms, ours.step_ms, ours.build_seconds, ours.fell_through,
-                      ratio(ours.collision_ms, builtin.collision_ms),
-                      ratio(ours.step_ms, builtin.step_ms), ratio(ours.contacts, builtin.contacts),
-                      ratio(ours.triangles, builtin.triangles));
+        std::snprintf(
+            buf, sizeof buf,
+            "| %s | %d^2 | %d | boxtree %s | %.1f | %.0f | %.3f | %.3f | %.2f | %d | %.2f | %.2f | %.2f | %.2f |\n",
+            engine.c_str(), config.cells, config.bodies, method.c_str(), ours.contacts, ours.triangles,
+            ours.collision_ms, ours.step_ms, ours.build_seconds, ours.fell_through,
+            ratio(ours.collision_ms, builtin.collision_ms), ratio(ours.step_ms, builtin.step_ms),
+            ratio(ours.contacts, builtin.contacts), ratio(ours.triangles, builtin.triangles));
         md << buf;
         std::printf(
-            "%s: boxtree %s contacts %.1f triangles %.0f collision %.3f ms (%.2fx) step %.3f ms (%.2fx) build %.2f s fell "
+            "%s: boxtree %s contacts %.1f triangles %.0f collision %.3f ms (%.2fx) step %.3f ms (%.2fx) build %.2f s "
+            "fell "
             "through %d\n",
             case_name.c_str(), method.c_str(), ours.contacts, ours.triangles, ours.collision_ms,
             ratio(ours.collision_ms, builtin.collision_ms), ours.step_ms, ratio(ours.step_ms, builtin.step_ms),
@@ -320,7 +326,9 @@ int main(int argc, char** argv) {
   if (!breakdown_md.str().empty()) {
     md << "\n**Where ODE's collision time goes**: ms per step in the near callback's `dCollide` calls, by the "
           "kind of pair (a body with the terrain, by the body's shape, or two bodies); calls and contacts per "
-          "step, and triangles handed to the narrowphase per step (ODE: OPCODE's triangle callback, which not every collider calls; boxtree: the adapter's candidate facets). `terrain_collide_ms_per_step` in `bench/results.json` is the sum of the terrain rows. ODE's hash "
+          "step, and triangles handed to the narrowphase per step (ODE: OPCODE's triangle callback, which not every "
+          "collider calls; boxtree: the adapter's candidate facets). `terrain_collide_ms_per_step` in "
+          "`bench/results.json` is the sum of the terrain rows. ODE's hash "
           "space (finding the pairs) is in the collision time above but in none of these rows.\n"
        << breakdown_md.str();
   }

@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "Times every pair is collided")->capture_default_str();
   app.add_option("--rounds", rounds, "Replays per world, alternating; the fastest is kept")->capture_default_str();
   app.add_option("--seed", seed, "Scene seed")->capture_default_str();
-  app.add_option("--only", only_name, "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
+  app.add_option("--only", only_name,
+                 "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
   app.add_option("--midphase", midphase, "builtin, boxtree or both")->capture_default_str();
   app.add_option("--method", method, "boxtree hierarchy method")->capture_default_str();
   int max_contacts = 8;
@@ -108,8 +109,8 @@ int main(int argc, char** argv) {
                   per_call(b, double(b.contacts)), per_call(b, double(b.triangles)),
                   a.seconds > 0 ? b.seconds / a.seconds : 0.0);
     }
-    std::printf("%-18s %8s | %10.3f ms/replay %28s %10.3f ms/replay | %7.2f\n", "total", "", 1e3 * total[0] / repeats, "",
-                1e3 * total[1] / repeats, total[0] > 0 ? total[1] / total[0] : 0.0);
+    std::printf("%-18s %8s | %10.3f ms/replay %28s %10.3f ms/replay | %7.2f\n", "total", "", 1e3 * total[0] / repeats,
+                "", 1e3 * total[1] / repeats, total[0] > 0 ? total[1] / total[0] : 0.0);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pair_replay: %s\n", e.what());
     return 2;

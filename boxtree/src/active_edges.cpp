@@ -14,8 +14,11 @@ namespace {
 std::vector<VertexId> weld_by_position(const TriangleMesh& mesh) {
   std::vector<VertexId> order(mesh.vertices.size());
   for (VertexId v = 0; v < order.size(); ++v) order[v] = v;
-  auto key = [&](VertexId v) { return std::make_tuple(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z()); };
-  std::sort(order.begin(), order.end(), [&](VertexId p, VertexId q) { return std::make_pair(key(p), p) < std::make_pair(key(q), q); });
+  auto key = [&](VertexId v) {
+    return std::make_tuple(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z());
+  };
+  std::sort(order.begin(), order.end(),
+            [&](VertexId p, VertexId q) { return std::make_pair(key(p), p) < std::make_pair(key(q), q); });
   std::vector<VertexId> id(mesh.vertices.size());
   for (std::size_t i = 0; i < order.size(); ++i)
     id[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? id[order[i - 1]] : order[i];

@@ -13,9 +13,12 @@ AnyTree AnyTree::build(std::shared_ptr<const TriangleMesh> mesh, const Method& m
   return with_method(method, [&](auto tag) {
     using V = typename decltype(tag)::type;
     auto tree = build_tree<V>(std::move(mesh), settings_for(method, settings), stats);
-    if constexpr (std::is_same_v<V, Aabb>) return AnyTree(PackedAabbTree(tree));
-    else if constexpr (is_pie_slice_v<V>) return AnyTree(PackedPrismTree(tree), method);
-    else return AnyTree(std::move(tree), method);
+    if constexpr (std::is_same_v<V, Aabb>)
+      return AnyTree(PackedAabbTree(tree));
+    else if constexpr (is_pie_slice_v<V>)
+      return AnyTree(PackedPrismTree(tree), method);
+    else
+      return AnyTree(std::move(tree), method);
   });
 }
 

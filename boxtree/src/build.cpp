@@ -130,7 +130,8 @@ FacetFans facet_fans(const TriangleMesh& mesh, int max_fan, const std::vector<st
     fans.corners.resize(3 * n);
     for (FacetId f = 0; f < n; ++f) {
       // A facet repeating a vertex lists it once.
-      const VertexId a = welded[mesh.triangles[f][0]], b = welded[mesh.triangles[f][1]], c = welded[mesh.triangles[f][2]];
+      const VertexId a = welded[mesh.triangles[f][0]], b = welded[mesh.triangles[f][1]],
+                     c = welded[mesh.triangles[f][2]];
       std::uint32_t* const out = &fans.corners[3 * std::size_t(f)];
       out[0] = a;
       out[1] = b == a ? kNone : b;
@@ -155,7 +156,8 @@ FacetFans facet_fans(const TriangleMesh& mesh, int max_fan, const std::vector<st
       }
   }
   for (std::uint32_t w : fans.corners)
-    if (w != kNone) fans.bound += std::min<std::size_t>(fans.offsets[w + 1] - fans.offsets[w], 2 + std::size_t(max_fan));
+    if (w != kNone)
+      fans.bound += std::min<std::size_t>(fans.offsets[w + 1] - fans.offsets[w], 2 + std::size_t(max_fan));
   return fans;
 }
 
@@ -179,10 +181,9 @@ std::uint32_t* gather_facet_neighbors(const FacetFans& fans, FacetId f, std::uin
     if (ve - vb <= std::uint32_t(max_fan)) {
       for (std::uint32_t i = vb; i < ve; ++i) add(fans.incident[i]);
     } else {
-      const std::uint32_t i = std::uint32_t(
-          std::partition_point(fans.incident.begin() + vb, fans.incident.begin() + ve,
-                               [&](std::uint32_t q) { return facet_at[q] < f; }) -
-          fans.incident.begin());
+      const std::uint32_t i = std::uint32_t(std::partition_point(fans.incident.begin() + vb, fans.incident.begin() + ve,
+                                                                 [&](std::uint32_t q) { return facet_at[q] < f; }) -
+                                            fans.incident.begin());
       if (i > vb) add(fans.incident[i - 1]);
       if (i + 1 < ve) add(fans.incident[i + 1]);
     }
@@ -454,7 +455,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
                        settings.parent_fit == ParentFit::fit_facets);
   }
-  if (settings.strategy == BuildStrategy::terrain) return planar::build_terrain_tree<Volume>(std::move(mesh_ptr), stats);
+  if (settings.strategy == BuildStrategy::terrain)
+    return planar::build_terrain_tree<Volume>(std::move(mesh_ptr), stats);
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
   const TriangleMesh& mesh = *mesh_ptr;
@@ -477,7 +479,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   children.reserve(2 * (n - 1));
   if (fit_during_rounds) {
     volumes.reserve(2 * n - 1);
-    for (FacetId f = 0; f < n; ++f) volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+    for (FacetId f = 0; f < n; ++f)
+      volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
   }
   Aabb bounds;  // of the facets (a vertex that no facet uses is not checked by validate_mesh)
   for (FacetId f = 0; f < n; ++f)
@@ -569,7 +572,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
       std::uint32_t j = i + 1;
       while (j < count && morton[j].first == morton[i].first) ++j;
       if (j - i > 1)
-        std::sort(morton.begin() + i, morton.begin() + j, [&](const auto& a, const auto& b) { return tie(a.second) < tie(b.second); });
+        std::sort(morton.begin() + i, morton.begin() + j,
+                  [&](const auto& a, const auto& b) { return tie(a.second) < tie(b.second); });
       i = j;
     }
   };
@@ -678,7 +682,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
           prefetch(&active_box[p + 4]);
         }
         std::uint32_t* const begin = current.codes.get() + current.offsets[p];
-        const std::uint32_t* end = gather_facet_neighbors(fans, active[p], p, settings.max_neighbors, active.data(), stamp.data(), begin);
+        const std::uint32_t* end =
+            gather_facet_neighbors(fans, active[p], p, settings.max_neighbors, active.data(), stamp.data(), begin);
         const std::uint32_t count = std::uint32_t(end - begin);
         for (std::uint32_t k = 0; k < count; ++k) begin[k] *= 2;
         build_list(current, p, std::uint32_t(n), count, nullptr, p);
@@ -695,7 +700,8 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
 
     // Greedy maximal matching, cheapest first.
     greedy_matching(
-        current, [&](std::uint32_t slot, std::uint32_t u, std::uint32_t v) { return candidate_key(current, slot, u, v); },
+        current,
+        [&](std::uint32_t slot, std::uint32_t u, std::uint32_t v) { return candidate_key(current, slot, u, v); },
         active_order, m, partner, stack);
 
     // Parents for pairs (children in Morton order), carried nodes as they are: group g, the next
@@ -793,7 +799,9 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
       if (v.node < n) {
         const FacetId f = v.node;
         out_links[slot] = leaf_flag | f;
-        out_volumes[slot] = fit_during_rounds ? volumes[f] : Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+        out_volumes[slot] = fit_during_rounds
+                                ? volumes[f]
+                                : Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
         height = std::max(height, int(v.depth));
         visits.pop_back();
       } else if (v.children_done) {

@@ -14,7 +14,8 @@ namespace boxtree {
 bool is_rotation(const Mat3& rotation, Real tolerance) {
   if (!rotation.allFinite()) return false;
   const Mat3 gram = rotation.transpose() * rotation;
-  return (gram - Mat3::Identity()).cwiseAbs().maxCoeff() <= tolerance && std::abs(rotation.determinant() - 1) <= tolerance;
+  return (gram - Mat3::Identity()).cwiseAbs().maxCoeff() <= tolerance &&
+         std::abs(rotation.determinant() - 1) <= tolerance;
 }
 
 namespace {
@@ -91,10 +92,10 @@ std::vector<FacetPair> collide(const Tree<Volume>& a, const Tree<Volume>& b, con
       [&](auto visit) { collide<Volume>(a, b, a_from_b, visit, stats, settings); });
 }
 
-#define BOXTREE_INSTANTIATE_COLLIDE(V)                                                                     \
-  template void collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&,                            \
-                           FunctionRef<bool(const FacetPair&)>, QueryStats*, const CollideSettings&);        \
-  template std::vector<FacetPair> collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&, QueryStats*, \
+#define BOXTREE_INSTANTIATE_COLLIDE(V)                                                                                 \
+  template void collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&, FunctionRef<bool(const FacetPair&)>, \
+                           QueryStats*, const CollideSettings&);                                                       \
+  template std::vector<FacetPair> collide<V>(const Tree<V>&, const Tree<V>&, const RigidTransform&, QueryStats*,       \
                                              const CollideSettings&);
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_COLLIDE)
 

@@ -152,9 +152,7 @@ SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, con
 
 // Inward normals of the triangle's side walls (the prism over it along its normal):
 // wall(i) . (x - v[i]) >= 0 for points over the triangle.
-Vec3 inward_wall(const TriangleFrame& tri, int i) {
-  return tri.normal.cross(tri.v[(i + 1) % 3] - tri.v[i]);
-}
+Vec3 inward_wall(const TriangleFrame& tri, int i) { return tri.normal.cross(tri.v[(i + 1) % 3] - tri.v[i]); }
 
 // The parameter range [t0, t1] of the segment p0 + t*(p1-p0), t in [0,1], over the triangle
 // (inside its prism). False if empty.
@@ -225,8 +223,7 @@ Real added_area_2d(const Point2* hull, int h, const Point2& q) {
 // reduce_contacts on an array; returns the new count.
 int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance) {
   if (count <= 0) return 0;
-  std::sort(contacts, contacts + count,
-            [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+  std::sort(contacts, contacts + count, [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
   // Near-duplicates: same place and normals within ~10 degrees; the deeper one (earlier) stays.
   const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
   const Real merge_squared = merge_distance * merge_distance;
@@ -277,8 +274,8 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
       // Areas compare with a slack (relative, and to the set's size for collinear sets, whose
       // areas are rounding noise) so that rounding does not beat a real spread.
       const Real slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
-      const bool better = candidate_area > best_area + slack ||
-                          (candidate_area >= best_area - slack && distance[i] > best_distance);
+      const bool better =
+          candidate_area > best_area + slack || (candidate_area >= best_area - slack && distance[i] > best_distance);
       if (better) {
         best = i;
         best_area = candidate_area;
@@ -562,8 +559,8 @@ struct Axis {
   Vec3 normal = Vec3::UnitZ();
   Real overlap = kInf;
   AxisKind kind = AxisKind::kTriangleFace;
-  int shape_index = 0;     // face index, or edge direction (a polyhedron's: the edge)
-  int triangle_index = 0;  // triangle edge
+  int shape_index = 0;       // face index, or edge direction (a polyhedron's: the edge)
+  int triangle_index = 0;    // triangle edge
   bool single_edge = false;  // shape_index is one edge of a polyhedron, not a parallel class
 };
 
@@ -743,8 +740,9 @@ PolytopeTrianglePair closest_polytope_triangle(const Shape& shape, const Triangl
   };
   for (int j = 0; j < 3; ++j) consider(shape.closest_point(tri.v[j]), tri.v[j]);
   const Vec3 tri_center = (tri.v[0] + tri.v[1] + tri.v[2]) / 3;
-  const Real tri_radius = std::sqrt(std::max({(tri.v[0] - tri_center).squaredNorm(), (tri.v[1] - tri_center).squaredNorm(),
-                                              (tri.v[2] - tri_center).squaredNorm()}));
+  const Real tri_radius =
+      std::sqrt(std::max({(tri.v[0] - tri_center).squaredNorm(), (tri.v[1] - tri_center).squaredNorm(),
+                          (tri.v[2] - tri_center).squaredNorm()}));
   for (int i = 0; i < shape.vertex_count; ++i) {
     if (cannot_beat(shape.vertices[i], 0, tri_center, tri_radius)) continue;
     consider(shape.vertices[i], closest_point_on_triangle(shape.vertices[i], tri.v[0], tri.v[1], tri.v[2]));
@@ -775,8 +773,8 @@ PolytopeTrianglePair closest_polytope_triangle(const Shape& shape, const Triangl
 // decides, and the axis' features are used only when its gap is the distance (a face over a
 // vertex, crossing edges), so that a face hovering over a face still gets a patch.
 template <class Shape>
-int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const ContactOptions& options,
-                      int max_contacts, ContactPoint* out) {
+int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const ContactOptions& options, int max_contacts,
+                      ContactPoint* out) {
   const Real size = std::max(shape.size, tri.size);
   const Real slack = tolerance(size, std::max(shape.coord, tri.coord));
   const Real margin = std::max(options.margin, Real(0));
@@ -896,7 +894,8 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     chosen = best_tri_face;
   }
   const Axis face_choice = chosen;
-  if (best_edge.overlap < kInf && (chosen.overlap == kInf || best_edge.overlap < chosen.overlap - bias(chosen.overlap))) {
+  if (best_edge.overlap < kInf &&
+      (chosen.overlap == kInf || best_edge.overlap < chosen.overlap - bias(chosen.overlap))) {
     chosen = best_edge;
   }
   if (chosen.overlap == kInf) return 0;  // no axis at all: only for shapes without faces or edges
@@ -906,9 +905,12 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   thread_local std::array<ContactPoint, kScratchContacts> scratch;
   const auto generate = [&](const Axis& axis) {
     switch (axis.kind) {
-      case AxisKind::kTriangleFace: return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
-      case AxisKind::kShapeFace: return shape_face_contacts(shape.faces[axis.shape_index], tri, scratch.data());
-      case AxisKind::kEdges: return edge_contacts(shape, tri, axis, slack, scratch.data());
+      case AxisKind::kTriangleFace:
+        return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
+      case AxisKind::kShapeFace:
+        return shape_face_contacts(shape.faces[axis.shape_index], tri, scratch.data());
+      case AxisKind::kEdges:
+        return edge_contacts(shape, tri, axis, slack, scratch.data());
     }
     return 0;
   };
@@ -1347,8 +1349,8 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
 int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
                                 const ContactOptions& options, ContactPoint* out) {
   if (!finite(a, b, c) || polyhedron.vertices.empty() || !polyhedron.center.allFinite()) return 0;
-  return polytope_triangle(PolyhedronShape(polyhedron), TriangleFrame(a, b, c), options,
-                           kMaxPolyhedronTriangleContacts, out);
+  return polytope_triangle(PolyhedronShape(polyhedron), TriangleFrame(a, b, c), options, kMaxPolyhedronTriangleContacts,
+                           out);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1373,7 +1375,8 @@ int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
       n = (on_a - on_b) / distance;
     } else {
       n = (eb - sb).cross(ea - sa);
-      n = n.norm() > 0 ? Vec3(n.normalized()) : perpendicular_to((eb - sb).squaredNorm() > 0 ? Vec3(eb - sb) : Vec3(ea - sa));
+      n = n.norm() > 0 ? Vec3(n.normalized())
+                       : perpendicular_to((eb - sb).squaredNorm() > 0 ? Vec3(eb - sb) : Vec3(ea - sa));
     }
     out[0] = make_contact(on_b, n, -distance);
     return 1;
@@ -1447,9 +1450,7 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
   if (!(size > 0) || !(size < kInf)) return 0;
   const ccd_t ccd = make_ccd(size);
 
-  const auto overlap_along = [&](const Vec3& u) {
-    return project(tri, u).hi - u.dot(shape.support(-u));
-  };
+  const auto overlap_along = [&](const Vec3& u) { return project(tri, u).hi - u.dot(shape.support(-u)); };
   const CcdShape moved{&shape, Vec3::Zero()};
   const bool one_sided = tri.one_sided(options);
   bool push_out = one_sided && tri.signed_distance(shape.center) < 0;
@@ -1495,7 +1496,8 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
       // A polytope's overlap is piecewise linear and EPA's polytope is exact on it (to
       // epa_tolerance) unless the margin rounds the triangle: no polish then. That is 80% of the
       // time per contact on hulls.
-      if (!shape.polytope || margin > 0) polish_normal(overlap_along, one_sided ? tri.normal : Vec3::Zero(), start, value);
+      if (!shape.polytope || margin > 0)
+        polish_normal(overlap_along, one_sided ? tri.normal : Vec3::Zero(), start, value);
       if (value < depth) {
         depth = value;
         normal = start;
@@ -1812,7 +1814,8 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   const Vec3 front = one_sided ? tri.normal : Vec3::Zero();
   Real best = values[0];
   Vec3 best_normal = normals[0];
-  const bool flat = polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 1, ridges, 4, noise, true, limit);
+  const bool flat =
+      polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 1, ridges, 4, noise, true, limit);
   // Else the minimum is on a curved face: a disk's rim against an edge (the faces of the Minkowski
   // difference swept by an edge and a rim point have normals across the edge, on the great circle
   // u . e = 0). Along that circle the triangle's support is the edge on the side of its outward
@@ -1855,7 +1858,8 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     circle_value[j] = kInf;
     circle_least[j] = 0;
     const Real inside = m.dot(tri.v[j] - lowest);
-    const Real bound = lowest_depth < 0 && inside < 0 ? -std::hypot(lowest_depth, inside) : std::min(lowest_depth, inside);
+    const Real bound =
+        lowest_depth < 0 && inside < 0 ? -std::hypot(lowest_depth, inside) : std::min(lowest_depth, inside);
     if (one_sided && bound >= best - noise) {
       circle_skipped[j] = true;
       continue;
@@ -1910,10 +1914,11 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   }
   if (!(best >= -margin)) return 0;
   if (one_sided && best_normal.dot(tri.normal) < -kBehind) return general();
-  return finish(best_normal, best,
-                make_contact(landing_position(tri, best_normal,
-                                              support_cylinder(p0, p1, radius, -best_normal) + best * best_normal, size),
-                             best_normal, best));
+  return finish(
+      best_normal, best,
+      make_contact(
+          landing_position(tri, best_normal, support_cylinder(p0, p1, radius, -best_normal) + best * best_normal, size),
+          best_normal, best));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -24,8 +24,8 @@ TriangleMesh make_uv_sphere(int segments, int rings, Real radius, const Vec3& ce
     const Real theta = pi * r / rings;
     for (int s = 0; s < segments; ++s) {
       const Real phi = 2 * pi * s / segments;
-      mesh.vertices.push_back(center + radius * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
-                                                     std::cos(theta)));
+      mesh.vertices.push_back(
+          center + radius * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
     }
   }
   mesh.vertices.push_back(center - Vec3(0, 0, radius));

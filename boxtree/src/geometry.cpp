@@ -32,9 +32,7 @@ bool is_zero(const Vec3& v) { return v.x() == 0 && v.y() == 0 && v.z() == 0; }
 
 // ((b - a) x (c - a)) . (d - a): positive when d lies on the side of the plane (a, b, c) that the
 // normal (b - a) x (c - a) points to, zero when the four points are coplanar.
-Real orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return (b - a).cross(c - a).dot(d - a);
-}
+Real orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
 
 // Twice the signed area of the 2D triangle (a, b, c): positive when counter-clockwise.
 Real orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
@@ -86,9 +84,8 @@ bool point_in_triangle_2d(const Vec2& x, const Vec2& a, const Vec2& b, const Vec
 }
 
 bool segment_meets_triangle_2d(const Vec2& s, const Vec2& e, const Vec2& a, const Vec2& b, const Vec2& c) {
-  return point_in_triangle_2d(s, a, b, c) || point_in_triangle_2d(e, a, b, c) ||
-         segments_intersect_2d(s, e, a, b) || segments_intersect_2d(s, e, b, c) ||
-         segments_intersect_2d(s, e, c, a);
+  return point_in_triangle_2d(s, a, b, c) || point_in_triangle_2d(e, a, b, c) || segments_intersect_2d(s, e, a, b) ||
+         segments_intersect_2d(s, e, b, c) || segments_intersect_2d(s, e, c, a);
 }
 
 bool triangles_intersect_2d(const Vec2 (&p)[3], const Vec2 (&q)[3]) {
@@ -104,8 +101,7 @@ bool triangles_intersect_2d(const Vec2 (&p)[3], const Vec2 (&q)[3]) {
 // Closed segment [s, e] (possibly a point) against the non-degenerate triangle (a, b, c) with
 // normal n = (b - a) x (c - a). Orientation-only version of Ericson 5.3.4 (line vs triangle by
 // scalar triple products), restricted to the segment by the signs of its ends w.r.t. the plane.
-bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c,
-                            const Vec3& n) {
+bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n) {
   // A meeting point lies in both bounding boxes, so disjoint boxes (compared exactly) mean no
   // meeting. This also decides the cases the orientation tests below cannot: a triangle so much
   // smaller than the segment's coordinates (a ratio beyond ~1e15) that its corners vanish in
@@ -228,7 +224,6 @@ Real segment_box_squared_distance(const Vec3& p0, const Vec3& p1, const Aabb& bo
   }
   return best;
 }
-
 
 // Watertight ray/triangle (Woop, Benthin, Wald, JCGT 2013): the edge function of the directed
 // edge p -> q in the sheared 2D frame, U = qx*py - qy*px for the edge opposite a (the paper's
@@ -365,8 +360,8 @@ bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a
 // ---------------------------------------------------------------------------------------------
 // Triangle / triangle
 
-bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
-                         const Vec3& b0, const Vec3& b1, const Vec3& b2) {
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
   // Disjoint bounding boxes (compared exactly) mean disjoint triangles. Besides being cheap, this
   // decides cases the orientation tests below cannot resolve: corners of magnitudes 1e15 and
   // more apart, where the small ones vanish in the rounding (e.g. a segment 1e32 long against
@@ -423,7 +418,7 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
   // Each triangle now straddles or touches the other's plane. Pick in each a pivot corner that is
   // alone on its (closed) side, so that the two edges leaving it cut the other plane at the two
   // ends of the triangle's interval on the planes' common line. sign = the pivot's side.
-  const auto pivot = [](const Real (&side)[3], int& index, int& sign) {
+  const auto pivot = [](const Real(&side)[3], int& index, int& sign) {
     int positive = 0;
     int negative = 0;
     for (int i = 0; i < 3; ++i) {
@@ -683,8 +678,8 @@ bool overlaps(const Aabb& box, const Capsule& capsule) {
   if (box.is_empty()) return false;
   // Never miss a true contact: pad the radius by a few hundred ulps of the coordinates involved,
   // which covers the rounding of the distance computation (conservative, not exact).
-  const Real scale = box.min.cwiseAbs().maxCoeff() + box.max.cwiseAbs().maxCoeff() +
-                     capsule.p0.cwiseAbs().maxCoeff() + capsule.p1.cwiseAbs().maxCoeff() + capsule.radius;
+  const Real scale = box.min.cwiseAbs().maxCoeff() + box.max.cwiseAbs().maxCoeff() + capsule.p0.cwiseAbs().maxCoeff() +
+                     capsule.p1.cwiseAbs().maxCoeff() + capsule.radius;
   const Real r = capsule.radius + kContactSlack * scale;
   // Quick reject on the capsule's bounding box.
   const Vec3 lo = capsule.p0.cwiseMin(capsule.p1).array() - r;

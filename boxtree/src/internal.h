@@ -28,8 +28,9 @@ void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2);
 // depth_first_order gives the links and, per slot, the node's build index (children always get
 // larger slots than their parent); depth_first_layout also copies the volumes.
 inline void depth_first_order(const std::vector<std::uint32_t>& first, const std::vector<std::uint32_t>& second,
-                              std::uint32_t root, std::size_t node_count, std::size_t leaf_count, std::uint32_t leaf_flag,
-                              std::vector<std::uint32_t>& out_links, std::vector<std::uint32_t>& out_nodes) {
+                              std::uint32_t root, std::size_t node_count, std::size_t leaf_count,
+                              std::uint32_t leaf_flag, std::vector<std::uint32_t>& out_links,
+                              std::vector<std::uint32_t>& out_nodes) {
   out_links.assign(node_count, 0);
   out_nodes.assign(node_count, 0);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root, 0}};  // (build index, output slot)
@@ -52,7 +53,8 @@ inline void depth_first_order(const std::vector<std::uint32_t>& first, const std
 template <class Volume>
 void depth_first_layout(const std::vector<Volume>& volumes, const std::vector<std::uint32_t>& first,
                         const std::vector<std::uint32_t>& second, std::uint32_t root, std::size_t leaf_count,
-                        std::uint32_t leaf_flag, std::vector<Volume>& out_volumes, std::vector<std::uint32_t>& out_links) {
+                        std::uint32_t leaf_flag, std::vector<Volume>& out_volumes,
+                        std::vector<std::uint32_t>& out_links) {
   std::vector<std::uint32_t> nodes;
   depth_first_order(first, second, root, volumes.size(), leaf_count, leaf_flag, out_links, nodes);
   out_volumes.resize(volumes.size());

@@ -22,7 +22,8 @@ constexpr std::array<std::pair<const char*, VolumeKind>, 8> kNames = {{
 std::string valid_list() {
   std::string valid;
   for (const auto& [name, kind] : kNames) valid += std::string(valid.empty() ? "" : ", ") + name;
-  return valid + ", the suffix -tight on oriented methods (e.g. obb-min-tight), and hybrids M+aabb@L (e.g. pie-min+aabb@4)";
+  return valid +
+         ", the suffix -tight on oriented methods (e.g. obb-min-tight), and hybrids M+aabb@L (e.g. pie-min+aabb@4)";
 }
 }  // namespace
 
@@ -54,7 +55,8 @@ Method parse_method(const std::string& name) {
     method.hybrid_level = int(value);
   }
   const std::string tight_suffix = "-tight";
-  if (base.size() > tight_suffix.size() && base.compare(base.size() - tight_suffix.size(), tight_suffix.size(), tight_suffix) == 0) {
+  if (base.size() > tight_suffix.size() &&
+      base.compare(base.size() - tight_suffix.size(), tight_suffix.size(), tight_suffix) == 0) {
     base.resize(base.size() - tight_suffix.size());
     method.tight = true;
   }
@@ -62,7 +64,8 @@ Method parse_method(const std::string& name) {
     if (base == n) {
       method.kind = kind;
       if (kind == VolumeKind::aabb && method.hybrid_level > 0)
-        throw Error("method '" + name + "': aabb is axis-aligned already; hybrids combine an oriented method with aabb");
+        throw Error("method '" + name +
+                    "': aabb is axis-aligned already; hybrids combine an oriented method with aabb");
       if (kind == VolumeKind::aabb && method.tight)
         throw Error("method '" + name + "': aabb parents are exact already; -tight applies to oriented methods");
       return method;

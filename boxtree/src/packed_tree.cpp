@@ -158,7 +158,8 @@ PackedAabbTree::PackedAabbTree(const Tree<Aabb>& tree) {
         node.min[i][slot] = std::uint16_t(quantize_down(box.min[i], i) - kSpareSteps);
         node.max[i][slot] = std::uint16_t(quantize_up(box.max[i], i) + kSpareSteps);
       }
-      node.link[slot] = tree.is_leaf(children[slot]) ? (kLeafFlag | tree.facet(children[slot])) : 0;  // inner: set when laid out
+      node.link[slot] =
+          tree.is_leaf(children[slot]) ? (kLeafFlag | tree.facet(children[slot])) : 0;  // inner: set when laid out
       if (tree.is_leaf(children[slot])) height_ = std::max(height_, p.depth + 1);
     }
     // Pushed last to first, so that the first inner child's subtree is laid out right after.
@@ -202,8 +203,8 @@ struct GridBox {
     // Apart on an axis: the node's min above the query's max, or the query's min above the node's max.
     const __m128i apart_xy = _mm_or_si128(_mm_cmpgt_epi16(load16(&node.min[0][0]), max_xy),
                                           _mm_cmpgt_epi16(min_xy, load16(&node.max[0][0])));
-    const __m128i apart_z = _mm_or_si128(_mm_cmpgt_epi16(load8(&node.min[2][0]), max_z),
-                                         _mm_cmpgt_epi16(min_z, load8(&node.max[2][0])));
+    const __m128i apart_z =
+        _mm_or_si128(_mm_cmpgt_epi16(load8(&node.min[2][0]), max_z), _mm_cmpgt_epi16(min_z, load8(&node.max[2][0])));
     const __m128i apart = _mm_or_si128(_mm_or_si128(apart_xy, _mm_unpackhi_epi64(apart_xy, apart_xy)), apart_z);
     return ~unsigned(_mm_movemask_epi8(_mm_packs_epi16(apart, apart))) & 0xFu;
   }
@@ -261,9 +262,9 @@ Aabb bounding_aabb(const Capsule& capsule) {
 struct GridObbAxes {
   bool enabled = false;
   GridObbAxes() = default;  // disabled: every child passes
-  float w[3][3] = {};   // [axis j][grid axis i]
-  float two_k[3] = {};  // 2 u_j . (C - origin)
-  float reach[3] = {};  // 2 r_j + pad
+  float w[3][3] = {};       // [axis j][grid axis i]
+  float two_k[3] = {};      // 2 u_j . (C - origin)
+  float reach[3] = {};      // 2 r_j + pad
 
   // `radii`: the box's radius along each of its axes (its half extents if the axes are
   // orthonormal).
@@ -546,8 +547,10 @@ class OrderedRayWalk {
       if (link == PackedAabbTree::kEmpty) continue;
       // Start loading what the child will need: its node, or a leaf's vertex indices (the
       // vertices themselves depend on them).
-      if (!PackedAabbTree::is_leaf(link)) __builtin_prefetch(&nodes_[link]);
-      else __builtin_prefetch(&triangles_[PackedAabbTree::facet(link)]);
+      if (!PackedAabbTree::is_leaf(link))
+        __builtin_prefetch(&nodes_[link]);
+      else
+        __builtin_prefetch(&triangles_[PackedAabbTree::facet(link)]);
       const float s = s_enter[slot];  // at least s_min: hits() starts from it
       int k = count++;
       for (; k > 0 && hits[k - 1].s_enter > s; --k) hits[k] = hits[k - 1];
@@ -750,7 +753,8 @@ void ray_all_hits(const PackedAabbTree& tree, const Ray& ray, FunctionRef<bool(c
         ++sink.local.leaf_tests;
         const TriangleMesh& mesh = tree.mesh();
         TriangleHit hit;
-        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit))
+          return true;
         return visit(RayHit{f, hit.t, hit.u, hit.v});
       },
       sink.local);
@@ -761,13 +765,12 @@ std::optional<RayHit> ray_any_hit(const PackedAabbTree& tree, const Ray& ray, Qu
 }
 
 std::vector<RayHit> ray_all_hits(const PackedAabbTree& tree, const Ray& ray, QueryStats* stats) {
-  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); },
-                                        detail::nearer_hit);
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); }, detail::nearer_hit);
 }
 
 template <class Shape>
-void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit,
-                   QueryStats* stats, FacetTest test) {
+void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                   FacetTest test) {
   StatsSink sink(stats);
   if (tree.empty()) return;
   ++sink.local.volume_tests;
@@ -836,8 +839,7 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
 }
 
 template <class Shape>
-std::vector<FacetId> query_overlap(const PackedAabbTree& tree, const Shape& shape, QueryStats* stats,
-                                   FacetTest test) {
+std::vector<FacetId> query_overlap(const PackedAabbTree& tree, const Shape& shape, QueryStats* stats, FacetTest test) {
   return detail::collect_sorted<FacetId>([&](auto visit) { query_overlap<Shape>(tree, shape, visit, stats, test); });
 }
 
@@ -903,7 +905,10 @@ Outcome collide_through_facets(const PackedAabbTree& a, const PackedAabbTree& b,
   thread_local std::vector<FacetId> spare;
   struct Borrowed {
     std::vector<FacetId> list;
-    Borrowed() { list.swap(spare); list.clear(); }
+    Borrowed() {
+      list.swap(spare);
+      list.clear();
+    }
     ~Borrowed() { list.swap(spare); }
   } borrowed;
   std::vector<FacetId>& gathered = borrowed.list;
@@ -1030,9 +1035,8 @@ std::vector<FacetPair> collide(const PackedAabbTree& a, const PackedAabbTree& b,
   return detail::collect_sorted<FacetPair>([&](auto visit) { collide(a, b, a_from_b, visit, stats, settings); });
 }
 
-#define BOXTREE_INSTANTIATE_PACKED_OVERLAP(S)                                                               \
-  template void query_overlap<S>(const PackedAabbTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, \
-                                 FacetTest);                                                                \
+#define BOXTREE_INSTANTIATE_PACKED_OVERLAP(S)                                                                          \
+  template void query_overlap<S>(const PackedAabbTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, FacetTest); \
   template std::vector<FacetId> query_overlap<S>(const PackedAabbTree&, const S&, QueryStats*, FacetTest);
 BOXTREE_INSTANTIATE_PACKED_OVERLAP(Aabb)
 BOXTREE_INSTANTIATE_PACKED_OVERLAP(Obb)

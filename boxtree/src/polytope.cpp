@@ -76,8 +76,7 @@ struct SatContext {
     const Interval ia = project(a, axis, origin);
     const Interval ib = project(b, axis, origin);
     if (ia.lo > ib.hi + pad || ib.lo > ia.hi + pad) return true;
-    if (record_thin && thin_count < kMaxThinNormals &&
-        (ia.hi - ia.lo) + (ib.hi - ib.lo) <= kThin * length * scale) {
+    if (record_thin && thin_count < kMaxThinNormals && (ia.hi - ia.lo) + (ib.hi - ib.lo) <= kThin * length * scale) {
       thin[thin_count++] = axis;
     }
     return false;

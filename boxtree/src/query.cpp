@@ -137,7 +137,8 @@ void all_hits_of(const View& tree, const Ray& ray, FunctionRef<bool(const RayHit
       [&](FacetId f) {
         ++sink.local.leaf_tests;
         TriangleHit hit;
-        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit)) return true;
+        if (!intersect_ray_triangle(ray, shear, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), hit))
+          return true;
         return visit(RayHit{f, hit.t, hit.u, hit.v});
       },
       sink.local);
@@ -238,21 +239,21 @@ std::size_t stabbing_count(const Tree<Volume>& tree, const Vec3& point, QuerySta
   return std::size_t(sink.local.nodes_visited - before);
 }
 
-#define BOXTREE_INSTANTIATE_QUERIES(V)                                                                            \
-  template std::optional<RayHit> ray_closest_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                     \
-  template void ray_candidates<V>(const Tree<V>&, const Ray&, FunctionRef<Real(FacetId, Real)>, QueryStats*);       \
-  template std::optional<RayHit> ray_any_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                         \
-  template void ray_all_hits<V>(const Tree<V>&, const Ray&, FunctionRef<bool(const RayHit&)>, QueryStats*);       \
-  template std::vector<RayHit> ray_all_hits<V>(const Tree<V>&, const Ray&, QueryStats*);                          \
-  template void query_plane<V>(const Tree<V>&, const Plane&, FunctionRef<bool(FacetId)>, QueryStats*);            \
-  template std::vector<FacetId> query_plane<V>(const Tree<V>&, const Plane&, QueryStats*);                        \
-  template std::size_t stabbing_count<V>(const Tree<V>&, const Vec3&, QueryStats*);                               \
-  BOXTREE_INSTANTIATE_OVERLAP(V, Aabb)                                                                            \
-  BOXTREE_INSTANTIATE_OVERLAP(V, Obb)                                                                             \
-  BOXTREE_INSTANTIATE_OVERLAP(V, Sphere)                                                                          \
+#define BOXTREE_INSTANTIATE_QUERIES(V)                                                                        \
+  template std::optional<RayHit> ray_closest_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                 \
+  template void ray_candidates<V>(const Tree<V>&, const Ray&, FunctionRef<Real(FacetId, Real)>, QueryStats*); \
+  template std::optional<RayHit> ray_any_hit<V>(const Tree<V>&, const Ray&, QueryStats*);                     \
+  template void ray_all_hits<V>(const Tree<V>&, const Ray&, FunctionRef<bool(const RayHit&)>, QueryStats*);   \
+  template std::vector<RayHit> ray_all_hits<V>(const Tree<V>&, const Ray&, QueryStats*);                      \
+  template void query_plane<V>(const Tree<V>&, const Plane&, FunctionRef<bool(FacetId)>, QueryStats*);        \
+  template std::vector<FacetId> query_plane<V>(const Tree<V>&, const Plane&, QueryStats*);                    \
+  template std::size_t stabbing_count<V>(const Tree<V>&, const Vec3&, QueryStats*);                           \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Aabb)                                                                        \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Obb)                                                                         \
+  BOXTREE_INSTANTIATE_OVERLAP(V, Sphere)                                                                      \
   BOXTREE_INSTANTIATE_OVERLAP(V, Capsule)
 
-#define BOXTREE_INSTANTIATE_OVERLAP(V, S)                                                                         \
+#define BOXTREE_INSTANTIATE_OVERLAP(V, S)                                                                          \
   template void query_overlap<V, S>(const Tree<V>&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, FacetTest); \
   template std::vector<FacetId> query_overlap<V, S>(const Tree<V>&, const S&, QueryStats*, FacetTest);
 
@@ -279,24 +280,21 @@ std::optional<RayHit> ray_any_hit(const PackedPrismTree& tree, const Ray& ray, Q
 }
 
 std::vector<RayHit> ray_all_hits(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
-  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); },
-                                        detail::nearer_hit);
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); }, detail::nearer_hit);
 }
 
 template <class Shape>
-void query_overlap(const PackedPrismTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit,
-                   QueryStats* stats, FacetTest test) {
+void query_overlap(const PackedPrismTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                   FacetTest test) {
   overlap_of(PackedPrismView{tree}, shape, visit, stats, test);
 }
 
 template <class Shape>
-std::vector<FacetId> query_overlap(const PackedPrismTree& tree, const Shape& shape, QueryStats* stats,
-                                   FacetTest test) {
+std::vector<FacetId> query_overlap(const PackedPrismTree& tree, const Shape& shape, QueryStats* stats, FacetTest test) {
   return detail::collect_sorted<FacetId>([&](auto visit) { query_overlap<Shape>(tree, shape, visit, stats, test); });
 }
 
-void query_plane(const PackedPrismTree& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit,
-                 QueryStats* stats) {
+void query_plane(const PackedPrismTree& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
   plane_of(PackedPrismView{tree}, plane, visit, stats);
 }
 
@@ -304,9 +302,9 @@ std::vector<FacetId> query_plane(const PackedPrismTree& tree, const Plane& plane
   return detail::collect_sorted<FacetId>([&](auto visit) { query_plane(tree, plane, visit, stats); });
 }
 
-#define BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(S)                                                           \
-  template void query_overlap<S>(const PackedPrismTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*,  \
-                                 FacetTest);                                                                 \
+#define BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(S)                                                         \
+  template void query_overlap<S>(const PackedPrismTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, \
+                                 FacetTest);                                                                \
   template std::vector<FacetId> query_overlap<S>(const PackedPrismTree&, const S&, QueryStats*, FacetTest);
 BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Aabb)
 BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Obb)

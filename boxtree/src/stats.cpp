@@ -84,8 +84,9 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance, Containment 
     return problem.str();
   }
   const Aabb root_box = bounding_aabb(tree.volume(tree.root()));
-  const Real scale = std::max<Real>(1, root_box.extent().cwiseAbs().maxCoeff() +
-                                           std::max(root_box.min.cwiseAbs().maxCoeff(), root_box.max.cwiseAbs().maxCoeff()));
+  const Real scale =
+      std::max<Real>(1, root_box.extent().cwiseAbs().maxCoeff() +
+                            std::max(root_box.min.cwiseAbs().maxCoeff(), root_box.max.cwiseAbs().maxCoeff()));
   const Real tol = tolerance * scale;
 
   std::vector<int> seen_node(tree.node_count(), 0);
@@ -157,7 +158,7 @@ std::string validate_tree(const Tree<Volume>& tree, Real tolerance, Containment 
   return "";
 }
 
-#define BOXTREE_INSTANTIATE_STATS(V)                         \
+#define BOXTREE_INSTANTIATE_STATS(V)                        \
   template TreeStats compute_tree_stats<V>(const Tree<V>&); \
   template std::string validate_tree<V>(const Tree<V>&, Real, Containment);
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_STATS)

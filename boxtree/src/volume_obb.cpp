@@ -45,7 +45,6 @@ bool valid_box(const Obb& box) {
 
 bool is_flat(const Vec3& half_extents) { return half_extents.minCoeff() <= kFlat * half_extents.maxCoeff(); }
 
-
 // Box/box in world (or any common) frame. When both boxes are flat and the 15 axes say
 // "overlap", the generic test adds the in-plane axes of nearly coplanar pairs, where Gottschalk's
 // padding would otherwise leave a band of false contacts (see polytope.cpp).
@@ -56,7 +55,6 @@ bool obb_obb(const Obb& a, const Obb& b) {
   if (is_flat(a.half_extents) && is_flat(b.half_extents)) return sat_overlap(polytope_of(a), polytope_of(b));
   return true;
 }
-
 
 // The box with the given axes that encloses `points` most tightly: its center is the middle of
 // the points' projections on the axes (not their centroid, which would not give the smallest
@@ -252,8 +250,8 @@ bool overlaps(const Obb& box, const Sphere& query) {
   // Clamp in the box frame (Ericson 5.1.4): the closest point of the box to the center.
   const Vec3 x = to_local(box, query.center);
   const Vec3 closest = x.cwiseMax(-box.half_extents).cwiseMin(box.half_extents);
-  const Real r = query.radius + kShapeSlack * ((query.center - box.center).cwiseAbs().sum() +
-                                               box.half_extents.sum() + query.radius);
+  const Real r = query.radius +
+                 kShapeSlack * ((query.center - box.center).cwiseAbs().sum() + box.half_extents.sum() + query.radius);
   return (x - closest).squaredNorm() <= r * r;
 }
 
@@ -270,9 +268,9 @@ bool overlaps(const Obb& box, const Plane& plane) {
   // The plane function is linear: over the box it ranges over d +- sum_i h_i |n . a_i|.
   const Real d = plane.normal.dot(box.center) - plane.offset;
   const Real r = (box.axes.transpose() * plane.normal).cwiseAbs().dot(box.half_extents);
-  const Real slack = kShapeSlack * (plane.normal.cwiseAbs().sum() *
-                                        (box.center.cwiseAbs().maxCoeff() + box.half_extents.sum()) +
-                                    std::abs(plane.offset));
+  const Real slack =
+      kShapeSlack * (plane.normal.cwiseAbs().sum() * (box.center.cwiseAbs().maxCoeff() + box.half_extents.sum()) +
+                     std::abs(plane.offset));
   return std::abs(d) <= r + slack;
 }
 
@@ -360,7 +358,8 @@ Obb obb_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis ax
   const Vec3 u = principal.col(fixed == 0 ? 1 : 0);
   const Vec3 v = principal.col(fixed == 0 ? 2 : 1);
   std::vector<detail::Vec2> planar(count);
-  for (std::size_t k = 0; k < count; ++k) planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
+  for (std::size_t k = 0; k < count; ++k)
+    planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
   return fit_box(frame_from_rectangle(u, v, detail::min_area_rectangle(planar)), points, count, centroid,
                  Padding::parent);
 }

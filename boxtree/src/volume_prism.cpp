@@ -60,7 +60,6 @@ int longest_edge_index(const Prism& prism) {
   return longest;
 }
 
-
 // Unit in-plane directions: u along the longest base edge (any direction normal to the axis if
 // the base is a point), v = axis x u.
 void in_plane_frame(const Prism& prism, Vec3& u, Vec3& v) {
@@ -139,8 +138,8 @@ Real needle_slack(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 // The three-dimensional base corners of the planar triangle t (coordinates in the basis u, v
 // about `origin`), at height w along the axis a.
-std::array<Vec3, 3> lift(const detail::Triangle2& t, const Vec3& origin, const Vec3& u, const Vec3& v,
-                         const Vec3& a, Real w) {
+std::array<Vec3, 3> lift(const detail::Triangle2& t, const Vec3& origin, const Vec3& u, const Vec3& v, const Vec3& a,
+                         Real w) {
   std::array<Vec3, 3> base;
   for (int i = 0; i < 3; ++i) base[i] = origin + u * t.corners[i].x() + v * t.corners[i].y() + a * w;
   return base;
@@ -315,8 +314,8 @@ bool overlaps(const Prism& prism, const Capsule& query) {
   if (!(query.radius >= 0) || !query.p0.allFinite() || !query.p1.allFinite()) return false;
   const auto c = corners(prism);
   const PrismSlabs s = slabs_of(prism);
-  const Real scale = (query.p0 - c[0]).cwiseAbs().maxCoeff() + (query.p1 - c[0]).cwiseAbs().maxCoeff() + s.reach +
-                     query.radius;
+  const Real scale =
+      (query.p0 - c[0]).cwiseAbs().maxCoeff() + (query.p1 - c[0]).cwiseAbs().maxCoeff() + s.reach + query.radius;
   const Real r = query.radius + kShapeSlack * scale;
   // Quick reject on bounding boxes.
   const Aabb box = bounding_aabb(prism);
@@ -418,8 +417,8 @@ Prism prism_enclosing(const Prism& x, const Prism& y, PrincipalAxis axis, Triang
   return *prism_enclosing_points(points, 12, axis, rule, 12);
 }
 
-std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis, TriangleRule rule,
-                                            std::size_t max_hull) {
+std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis axis,
+                                            TriangleRule rule, std::size_t max_hull) {
   // The sweep axis is the points' max (or min) principal component; the points projected on the
   // plane normal to it get a minimum-area enclosing triangle (isosceles: the paper's rule;
   // general: O'Rourke et al.); the prism spans the points' extent along the axis.
@@ -448,8 +447,8 @@ std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t coun
     planar = detail::convex_hull_2d(std::move(planar));
     if (planar.size() > max_hull) return std::nullopt;
   }
-  const detail::Triangle2 triangle = rule == TriangleRule::isosceles ? detail::min_area_isosceles_triangle(planar)
-                                                               : detail::min_area_triangle(planar);
+  const detail::Triangle2 triangle =
+      rule == TriangleRule::isosceles ? detail::min_area_isosceles_triangle(planar) : detail::min_area_triangle(planar);
   const auto build = [&](const detail::Triangle2& t, Real pad) {
     Prism p;
     p.base = lift(t, centroid, u, v, a, w_lo - pad);

@@ -86,7 +86,8 @@ int run_info(const Options& o, const std::string& path) {
     if (o.json) {
       json levels = json::array();
       for (const LevelStats& l : s.levels)
-        levels.push_back({{"level", l.level}, {"nodes", l.nodes}, {"avg_area", l.avg_area}, {"avg_volume", l.avg_volume}});
+        levels.push_back(
+            {{"level", l.level}, {"nodes", l.nodes}, {"avg_area", l.avg_area}, {"avg_volume", l.avg_volume}});
       print_json({{"mesh", path},
                   {"method", o.method},
                   {"facets", s.facets},
@@ -106,10 +107,10 @@ int run_info(const Options& o, const std::string& path) {
       std::printf("method       %s\n", o.method.c_str());
       std::printf("facets       %zu (%zu degenerate), %zu vertices\n", s.facets, mesh_stats.degenerate_facets,
                   mesh_stats.vertices);
-      std::printf("tree         %zu nodes, height %d, %zu bytes (%.1f B/facet), built in %.3f s (%d rounds)\n",
-                  s.nodes, s.height, s.memory_bytes, double(s.memory_bytes) / double(s.facets), build.seconds,
-                  build.rounds);
-      std::printf("plane cost   %.3f = sum S_v / S_root (paper; = expected volumes cut per random line)\n", s.plane_cost);
+      std::printf("tree         %zu nodes, height %d, %zu bytes (%.1f B/facet), built in %.3f s (%d rounds)\n", s.nodes,
+                  s.height, s.memory_bytes, double(s.memory_bytes) / double(s.facets), build.seconds, build.rounds);
+      std::printf("plane cost   %.3f = sum S_v / S_root (paper; = expected volumes cut per random line)\n",
+                  s.plane_cost);
       std::printf("             %.3f = sum W_v / W_root (expected volumes cut per random plane, W = mean width)\n",
                   s.plane_cost_mean_width);
       std::printf("level  nodes      avg_area        avg_volume\n");
@@ -120,8 +121,8 @@ int run_info(const Options& o, const std::string& path) {
   });
 }
 
-int run_collide(const Options& o, const std::string& path_a, const std::string& path_b, const std::string& transform_text,
-                bool first_only) {
+int run_collide(const Options& o, const std::string& path_a, const std::string& path_b,
+                const std::string& transform_text, bool first_only) {
   const Method method = parse_method(o.method);
   const BuildSettings settings = settings_for(method, settings_of(o));
   RigidTransform a_from_b;
@@ -284,19 +285,22 @@ int main(int argc, char** argv) {
 
   std::string mesh_path, mesh_b_path, transform_text, rays_path;
   bool first_only = false;
-  CLI::App* info = app.add_subcommand("info", "Build a tree and print its statistics (height, memory, per-level area/volume)");
+  CLI::App* info =
+      app.add_subcommand("info", "Build a tree and print its statistics (height, memory, per-level area/volume)");
   info->add_option("MESH", mesh_path, "Mesh file (.obj .stl .ply .off)")->required();
   add_common(info);
 
   CLI::App* collide_cmd = app.add_subcommand("collide", "Count intersecting facet pairs of two meshes");
   collide_cmd->add_option("A", mesh_path, "First mesh")->required();
   collide_cmd->add_option("B", mesh_b_path, "Second mesh")->required();
-  collide_cmd->add_option("--transform", transform_text,
-                          "3x4 row-major transform applied to B's vertices: \"r00 r01 r02 tx r10 r11 r12 ty r20 r21 r22 tz\"");
+  collide_cmd->add_option(
+      "--transform", transform_text,
+      "3x4 row-major transform applied to B's vertices: \"r00 r01 r02 tx r10 r11 r12 ty r20 r21 r22 tz\"");
   collide_cmd->add_flag("--first", first_only, "Stop at the first intersecting pair");
   add_common(collide_cmd);
 
-  CLI::App* ray = app.add_subcommand("ray", "Closest hit (t >= 0) of each ray 'ox oy oz dx dy dz' in a file, one line each");
+  CLI::App* ray =
+      app.add_subcommand("ray", "Closest hit (t >= 0) of each ray 'ox oy oz dx dy dz' in a file, one line each");
   ray->add_option("MESH", mesh_path, "Mesh file")->required();
   ray->add_option("--rays", rays_path, "Ray file, one ray per line ('-' for standard input)")->required();
   add_common(ray);
@@ -308,7 +312,9 @@ int main(int argc, char** argv) {
   generate->add_option("KIND", kind, "terrain (size^2 cells), sphere, bumpy-sphere (size rings), soup (size triangles)")
       ->required();
   generate->add_option("--out", out_path, "Output OBJ file")->required();
-  generate->add_option("--size", size, "Size parameter (see KIND)")->capture_default_str()->check(CLI::Range(1, 1 << 24));
+  generate->add_option("--size", size, "Size parameter (see KIND)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1 << 24));
   generate->add_option("--seed", seed, "Random seed")->capture_default_str();
 
   if (argc > 1 && argv[1][0] != '-') {

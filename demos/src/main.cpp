@@ -156,18 +156,26 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
     worst_nan = std::max(worst_nan, nan);
     worst_below = std::max(worst_below, below);
     lowest = std::min(lowest, min_clearance);
-    std::printf("  step %d: %.0f s, %d non-finite, %d below the terrain, lowest centre %.4f m above it, %d contacts, RSS %ld kB\n",
-                step, seconds_since(start), nan, below, min_clearance, sim->contacts(), rss);
+    std::printf(
+        "  step %d: %.0f s, %d non-finite, %d below the terrain, lowest centre %.4f m above it, %d contacts, RSS %ld "
+        "kB\n",
+        step, seconds_since(start), nan, below, min_clearance, sim->contacts(), rss);
     std::fflush(stdout);
-    samples.push_back({{"step", step}, {"wall_seconds", seconds_since(start)}, {"non_finite", nan}, {"below", below},
-                       {"min_clearance", min_clearance}, {"contacts", sim->contacts()}, {"rss_kb", rss}});
+    samples.push_back({{"step", step},
+                       {"wall_seconds", seconds_since(start)},
+                       {"non_finite", nan},
+                       {"below", below},
+                       {"min_clearance", min_clearance},
+                       {"contacts", sim->contacts()},
+                       {"rss_kb", rss}});
   }
   const double wall = seconds_since(start);
   const long rss_middle = samples.empty() ? 0 : samples[samples.size() / 2]["rss_kb"].get<long>();
   const long rss_end = resident_kb();
-  std::printf("boxtree-demo soak: %d steps in %.0f s; non-finite poses at most %d, bodies below the terrain at most %d, "
-              "lowest centre %.4f m above the terrain; RSS start %ld kB, middle %ld kB, end %ld kB\n",
-              o.steps, wall, worst_nan, worst_below, lowest, rss_start, rss_middle, rss_end);
+  std::printf(
+      "boxtree-demo soak: %d steps in %.0f s; non-finite poses at most %d, bodies below the terrain at most %d, "
+      "lowest centre %.4f m above the terrain; RSS start %ld kB, middle %ld kB, end %ld kB\n",
+      o.steps, wall, worst_nan, worst_below, lowest, rss_start, rss_middle, rss_end);
   write_json(o.json_path, {{"mode", "soak"},
                            {"engine", o.engine},
                            {"midphase", midphase},

@@ -331,7 +331,7 @@ class OdeSimulation final : public Simulation {
   std::vector<dGeomID> convex_geoms_;
   int contacts_ = 0;
   double collision_seconds_ = 0;
-  std::vector<dGeomID> mesh_geoms_;     // terrain and mesh bodies
+  std::vector<dGeomID> mesh_geoms_;      // terrain and mesh bodies
   std::uint64_t builtin_triangles_ = 0;  // counted by count_triangle (builtin only)
 };
 

@@ -27,10 +27,14 @@ Real terrain_height(const AnyTree& tree, Real x, Real y) {
 std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
   std::uniform_real_distribution<float> s(0.3f, 0.8f);
   switch (kind % 5) {
-    case 0: return std::make_unique<btSphereShape>(s(rng));
-    case 1: return std::make_unique<btBoxShape>(btVector3(s(rng), s(rng), s(rng)));
-    case 2: return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, s(rng) * 1.5f);
-    case 3: return std::make_unique<btCylinderShapeZ>(btVector3(s(rng), s(rng), s(rng)));
+    case 0:
+      return std::make_unique<btSphereShape>(s(rng));
+    case 1:
+      return std::make_unique<btBoxShape>(btVector3(s(rng), s(rng), s(rng)));
+    case 2:
+      return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, s(rng) * 1.5f);
+    case 3:
+      return std::make_unique<btCylinderShapeZ>(btVector3(s(rng), s(rng), s(rng)));
     default: {
       auto hull = std::make_unique<btConvexHullShape>();
       std::uniform_real_distribution<float> p(-0.6f, 0.6f);
@@ -160,7 +164,8 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
       world.add(std::move(ground), 0, btVector3(0, 0, 0));
       auto hull = make_hull(shape_seed);
       // Lowered until its lowest point (with the margin) is `sink` below the terrain under its centre.
-      const btScalar lowest = quatRotate(turn, hull->localGetSupportingVertex(quatRotate(turn.inverse(), btVector3(0, 0, -1)))).z();
+      const btScalar lowest =
+          quatRotate(turn, hull->localGetSupportingVertex(quatRotate(turn.inverse(), btVector3(0, 0, -1)))).z();
       const btScalar z = btScalar(terrain_height(ground_shape->tree(), at.x(), at.y())) - lowest - sink;
       world.add(std::move(hull), 1, btVector3(at.x(), at.y(), z), turn);
       world.world.performDiscreteCollisionDetection();
@@ -181,8 +186,8 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
     // here, deeper on the face path). A wrong frame or a margin counted twice or not at all would
     // be off by the 4 cm margin or more.
     EXPECT_LE(deepest[0], deepest[1] + 2e-3) << "trial " << trial;
-    EXPECT_GE(deepest[0], deepest[1] - 1.5e-2) << "trial " << trial << ": separating axes " << points[0]
-                                               << " points, GJK " << points[1];
+    EXPECT_GE(deepest[0], deepest[1] - 1.5e-2)
+        << "trial " << trial << ": separating axes " << points[0] << " points, GJK " << points[1];
   }
   std::printf("%d poses compared; the face path gave more manifold points than GJK on %d\n", compared, more_points);
   EXPECT_GT(compared, 45);
@@ -216,7 +221,8 @@ TEST(BulletAlgorithms, MeshOnMeshComesToRest) {
   auto ground = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(terrain), "obb-min");
   const BoxtreeMeshShape* ground_shape = ground.get();
   world.add(std::move(ground), 0, btVector3(0, 0, 0));
-  auto rock = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(make_bumpy_sphere(10, 6, 0.3, 5)), "obb-min");
+  auto rock =
+      std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(make_bumpy_sphere(10, 6, 0.3, 5)), "obb-min");
   rock->setMargin(btScalar(0.02));
   btRigidBody* body = world.add(std::move(rock), 2, btVector3(15, 15, 4));
   body->setRollingFriction(btScalar(0.1));
@@ -299,7 +305,8 @@ Slide slide_box(int mode) {  // 0: boxtree analytic, 1: boxtree with Bullet's GJ
   } else {
     world.add(std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(floor), "aabb"), 0, btVector3(0, 0, 0));
   }
-  btRigidBody* box = world.add(std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.25f)), 1, btVector3(5, 5.3f, 0.26f));
+  btRigidBody* box =
+      world.add(std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.25f)), 1, btVector3(5, 5.3f, 0.26f));
   box->setFriction(0.0f);
   for (int i = 0; i < 30; ++i) world.world.stepSimulation(btScalar(1.0 / 60), 1, btScalar(1.0 / 60));
   box->setLinearVelocity(btVector3(6, 3.5f, 0));
@@ -316,9 +323,10 @@ Slide slide_box(int mode) {  // 0: boxtree analytic, 1: boxtree with Bullet's GJ
 
 TEST(BulletAlgorithms, SlidingBoxDoesNotBumpOnInternalEdges) {
   const Slide analytic = slide_box(0), gjk = slide_box(1), bullet = slide_box(2);
-  std::printf("sliding box, max upward speed / max spin: boxtree analytic %.3f / %.3f, boxtree gjk %.3f / %.3f, "
-              "bullet bvh %.3f / %.3f\n",
-              analytic.max_up, analytic.max_spin, gjk.max_up, gjk.max_spin, bullet.max_up, bullet.max_spin);
+  std::printf(
+      "sliding box, max upward speed / max spin: boxtree analytic %.3f / %.3f, boxtree gjk %.3f / %.3f, "
+      "bullet bvh %.3f / %.3f\n",
+      analytic.max_up, analytic.max_spin, gjk.max_up, gjk.max_spin, bullet.max_up, bullet.max_spin);
   for (const Slide& s : {analytic, gjk}) {
     EXPECT_GT(s.final_x, 25.0f);  // slid over ~20 cells, ~60 shared edges
     EXPECT_LT(s.max_up, 0.2f);    // m/s; Bullet's own shape reaches about 2

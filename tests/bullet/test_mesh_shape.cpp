@@ -33,7 +33,8 @@ FacetSet collect(const btConcaveShape& shape, const btVector3& lo, const btVecto
   return cb.facets;
 }
 
-const std::vector<std::string> kMethods = {"aabb", "obb-all", "obb-min", "pie-min", "pie-max-general", "obb-min+aabb@3"};
+const std::vector<std::string> kMethods = {"aabb",    "obb-all",         "obb-min",
+                                           "pie-min", "pie-max-general", "obb-min+aabb@3"};
 
 TriangleMesh test_terrain() { return make_terrain(24, 20, 7, 50, 8); }
 
@@ -155,8 +156,10 @@ TEST(BulletMeshShape, LocalScalingIncludingNegativeMatchesBruteForce) {
       }
       // Division by the scale may round a touching case either way: allow facets that touch.
       FacetSet missing, extra;
-      std::set_difference(expected.begin(), expected.end(), cb.facets.begin(), cb.facets.end(), std::inserter(missing, missing.end()));
-      std::set_difference(cb.facets.begin(), cb.facets.end(), expected.begin(), expected.end(), std::inserter(extra, extra.end()));
+      std::set_difference(expected.begin(), expected.end(), cb.facets.begin(), cb.facets.end(),
+                          std::inserter(missing, missing.end()));
+      std::set_difference(cb.facets.begin(), cb.facets.end(), expected.begin(), expected.end(),
+                          std::inserter(extra, extra.end()));
       EXPECT_LE(missing.size() + extra.size(), 1u) << "query " << q;
       for (const auto& [id, corners] : cb.corners) {
         for (const btVector3& p : corners) EXPECT_LE(double(p.z()), 1e-3);  // scaled by -1.5: below zero
@@ -245,8 +248,9 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
       // (btVector3::operator== also compares the unused fourth lane: compare x, y, z.)
       EXPECT_EQ(to_vec3(a.m_hitNormalWorld), to_vec3(b.m_hitNormalWorld)) << "ray " << i;
       EXPECT_LT((to_vec3(a.m_hitPointWorld) - to_vec3(b.m_hitPointWorld)).norm(), 1e-9)
-          << "ray " << i << ": " << to_vec3(a.m_hitPointWorld).transpose() << " vs " << to_vec3(b.m_hitPointWorld).transpose()
-          << " fractions " << a.m_closestHitFraction << " " << b.m_closestHitFraction;
+          << "ray " << i << ": " << to_vec3(a.m_hitPointWorld).transpose() << " vs "
+          << to_vec3(b.m_hitPointWorld).transpose() << " fractions " << a.m_closestHitFraction << " "
+          << b.m_closestHitFraction;
     }
     EXPECT_GT(hits, rays / 2);
     EXPECT_LE(ties, rays / 100);
@@ -269,12 +273,14 @@ TEST(BulletMeshShape, ConvexSweepTestMatchesBullet) {
   std::uniform_real_distribution<double> u(-5, 55);
   int hits = 0;
   for (int i = 0; i < 300; ++i) {
-    const btConvexShape* cast = i % 3 == 0 ? static_cast<btConvexShape*>(&sphere)
-                                           : i % 3 == 1 ? static_cast<btConvexShape*>(&box) : &capsule;
+    const btConvexShape* cast = i % 3 == 0   ? static_cast<btConvexShape*>(&sphere)
+                                : i % 3 == 1 ? static_cast<btConvexShape*>(&box)
+                                             : &capsule;
     const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(u(rng) / 10));
     const btTransform from(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(15 + u(rng) / 5))));
     const btTransform to(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(-8))));
-    btCollisionWorld::ClosestConvexResultCallback a(from.getOrigin(), to.getOrigin()), b(from.getOrigin(), to.getOrigin());
+    btCollisionWorld::ClosestConvexResultCallback a(from.getOrigin(), to.getOrigin()),
+        b(from.getOrigin(), to.getOrigin());
     w.bullet.world.convexSweepTest(cast, from, to, a);
     w.ours.world.convexSweepTest(cast, from, to, b);
     ASSERT_EQ(a.hasHit(), b.hasHit()) << "sweep " << i;

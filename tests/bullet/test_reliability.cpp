@@ -151,10 +151,14 @@ TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
   BulletMesh bullet_mesh(flat);
   const auto make_body_shape = [](int kind) -> std::unique_ptr<btCollisionShape> {
     switch (kind) {
-      case 0: return std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.5f));
-      case 1: return std::make_unique<btSphereShape>(0.5f);
-      case 2: return std::make_unique<btCapsuleShapeZ>(0.3f, 0.4f);
-      case 3: return std::make_unique<btCylinderShapeZ>(btVector3(0.5f, 0.5f, 0.5f));
+      case 0:
+        return std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.5f));
+      case 1:
+        return std::make_unique<btSphereShape>(0.5f);
+      case 2:
+        return std::make_unique<btCapsuleShapeZ>(0.3f, 0.4f);
+      case 3:
+        return std::make_unique<btCylinderShapeZ>(btVector3(0.5f, 0.5f, 0.5f));
       default: {  // an octagonal prism, 1 m across and 1 m high
         auto hull = std::make_unique<btConvexHullShape>();
         for (int k = 0; k < 8; ++k) {

@@ -34,14 +34,15 @@ struct BulletMesh {
       for (int k = 0; k < 3; ++k) vertices.push_back(btScalar(v[k]));
     for (const Triangle& t : mesh.triangles)
       for (VertexId v : t) indices.push_back(int(v));
-    array = std::make_unique<btTriangleIndexVertexArray>(int(mesh.triangles.size()), indices.data(), 3 * int(sizeof(int)),
-                                                         int(mesh.vertices.size()), vertices.data(),
-                                                         3 * int(sizeof(btScalar)));
+    array = std::make_unique<btTriangleIndexVertexArray>(int(mesh.triangles.size()), indices.data(),
+                                                         3 * int(sizeof(int)), int(mesh.vertices.size()),
+                                                         vertices.data(), 3 * int(sizeof(btScalar)));
   }
   // The mesh with Bullet's (possibly float) coordinates, for brute-force references.
   TriangleMesh as_boxtree() const {
     TriangleMesh m;
-    for (std::size_t i = 0; i < vertices.size(); i += 3) m.vertices.push_back({vertices[i], vertices[i + 1], vertices[i + 2]});
+    for (std::size_t i = 0; i < vertices.size(); i += 3)
+      m.vertices.push_back({vertices[i], vertices[i + 1], vertices[i + 2]});
     for (std::size_t i = 0; i < indices.size(); i += 3)
       m.triangles.push_back({VertexId(indices[i]), VertexId(indices[i + 1]), VertexId(indices[i + 2])});
     return m;
@@ -79,7 +80,8 @@ struct World {
   // Contact points in all manifolds now.
   int contact_points() {
     int n = 0;
-    for (int i = 0; i < dispatcher.getNumManifolds(); ++i) n += dispatcher.getManifoldByIndexInternal(i)->getNumContacts();
+    for (int i = 0; i < dispatcher.getNumManifolds(); ++i)
+      n += dispatcher.getManifoldByIndexInternal(i)->getNumContacts();
     return n;
   }
 };

@@ -54,10 +54,14 @@ struct OdeTrimesh {
 enum class BodyKind { sphere, box, capsule, cylinder };
 inline const char* kind_name(BodyKind kind) {
   switch (kind) {
-    case BodyKind::sphere: return "sphere";
-    case BodyKind::box: return "box";
-    case BodyKind::capsule: return "capsule";
-    case BodyKind::cylinder: return "cylinder";
+    case BodyKind::sphere:
+      return "sphere";
+    case BodyKind::box:
+      return "box";
+    case BodyKind::capsule:
+      return "capsule";
+    case BodyKind::cylinder:
+      return "cylinder";
   }
   return "?";
 }
@@ -132,7 +136,8 @@ class DropWorld {
     // Row 2 of R: the body axes' z components.
     const Vec3 zrow(r[8], r[9], r[10]);
     switch (dGeomGetClass(g)) {
-      case dSphereClass: return p[2] - dGeomSphereGetRadius(g);
+      case dSphereClass:
+        return p[2] - dGeomSphereGetRadius(g);
       case dBoxClass: {
         dVector3 l;
         dGeomBoxGetLengths(g, l);
@@ -149,7 +154,8 @@ class DropWorld {
         const Real axis_z = std::abs(zrow[2]);
         return p[2] - 0.5 * length * axis_z - radius * std::sqrt(std::max(Real(0), 1 - axis_z * axis_z));
       }
-      default: return p[2];
+      default:
+        return p[2];
     }
   }
 

@@ -14,7 +14,7 @@
 namespace boxtree::ode_test {
 namespace {
 
-constexpr int kSteps = 300;        // 3 s at 100 Hz: every body lands (within ~0.5 s) and settles
+constexpr int kSteps = 300;            // 3 s at 100 Hz: every body lands (within ~0.5 s) and settles
 constexpr Real kRestTolerance = 0.02;  // |rest height (ODE trimesh) - rest height (boxtree)|, units (bodies ~1)
 
 struct Summary {
@@ -45,8 +45,7 @@ void run_scene(const char* method) {
   std::vector<StepRecord> ode_steps, bt_steps;
   std::printf("[ drop     ] method %s: %zu bodies on a %zu-facet terrain; per step: contacts and dCollide time\n",
               method, drops.size(), terrain->facet_count());
-  std::printf("[ drop     ] %5s  %14s %14s  %12s %12s\n", "step", "contacts(ODE)", "contacts(bt)", "us(ODE)",
-              "us(bt)");
+  std::printf("[ drop     ] %5s  %14s %14s  %12s %12s\n", "step", "contacts(ODE)", "contacts(bt)", "us(ODE)", "us(bt)");
   for (int step = 0; step < kSteps; ++step) {
     ode_steps.push_back(ode_world.step());
     bt_steps.push_back(bt_world.step());
@@ -60,12 +59,13 @@ void run_scene(const char* method) {
   const std::vector<StepRecord> bt_rest(bt_steps.end() - 100, bt_steps.end());
   const Summary so = summarize(ode_steps), sb = summarize(bt_steps);
   const Summary ro = summarize(ode_rest), rb = summarize(bt_rest);
-  std::printf("[ drop     ] all steps : contacts/step ODE %.1f (max %d)  boxtree %.1f (max %d);"
-              " dCollide us/step ODE %.1f  boxtree %.1f\n",
-              so.contacts, so.max_contacts, sb.contacts, sb.max_contacts, so.collide_seconds * 1e6,
-              sb.collide_seconds * 1e6);
-  std::printf("[ drop     ] at rest   : contacts/step ODE %.1f  boxtree %.1f; dCollide us/step ODE %.1f  boxtree %.1f\n",
-              ro.contacts, rb.contacts, ro.collide_seconds * 1e6, rb.collide_seconds * 1e6);
+  std::printf(
+      "[ drop     ] all steps : contacts/step ODE %.1f (max %d)  boxtree %.1f (max %d);"
+      " dCollide us/step ODE %.1f  boxtree %.1f\n",
+      so.contacts, so.max_contacts, sb.contacts, sb.max_contacts, so.collide_seconds * 1e6, sb.collide_seconds * 1e6);
+  std::printf(
+      "[ drop     ] at rest   : contacts/step ODE %.1f  boxtree %.1f; dCollide us/step ODE %.1f  boxtree %.1f\n",
+      ro.contacts, rb.contacts, ro.collide_seconds * 1e6, rb.collide_seconds * 1e6);
 
   std::printf("[ drop     ] %-9s %9s %9s | %9s %9s %9s | %8s\n", "body", "x", "y", "z(ODE)", "z(bt)", "dz", "ground");
   for (std::size_t i = 0; i < drops.size(); ++i) {
@@ -181,10 +181,11 @@ TEST(OdeDrop, ClosedMeshComesToRest) {
     const dReal* p = dBodyGetPosition(body);
     const dReal* v = dBodyGetLinearVel(body);
     const Real ground_here = terrain_height(reference, p[0], p[1]);
-    std::printf("[ mesh     ] pair %d: rests at z %.4f over ground %.4f (bottom %.4f above), %.1f contacts/step,"
-                " |v| %.4f\n",
-                int(pair), p[2], ground_here, p[2] - 0.85 - ground_here, contacts_at_rest / 50.0,
-                Vec3(v[0], v[1], v[2]).norm());
+    std::printf(
+        "[ mesh     ] pair %d: rests at z %.4f over ground %.4f (bottom %.4f above), %.1f contacts/step,"
+        " |v| %.4f\n",
+        int(pair), p[2], ground_here, p[2] - 0.85 - ground_here, contacts_at_rest / 50.0,
+        Vec3(v[0], v[1], v[2]).norm());
     EXPECT_LT(Vec3(v[0], v[1], v[2]).norm(), 0.05);
     EXPECT_GT(contacts_at_rest, 0);
     // The rock's radius is 0.85..1.15: its centre rests between those heights over the ground.

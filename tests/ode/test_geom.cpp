@@ -110,8 +110,7 @@ TEST(OdeGeom, ArraysLikeTriMeshDataBuild) {
     const TriangleMesh& m = boxtree::ode::geom_tree(g)->mesh();
     ASSERT_EQ(m.triangles.size(), grid->triangles.size());
     for (std::size_t f = 0; f < m.triangles.size(); ++f)
-      for (int k = 0; k < 3; ++k)
-        EXPECT_LT((m.corner(FacetId(f), k) - grid->corner(FacetId(f), k)).norm(), 1e-6);
+      for (int k = 0; k < 3; ++k) EXPECT_LT((m.corner(FacetId(f), k) - grid->corner(FacetId(f), k)).norm(), 1e-6);
   }
   EXPECT_THROW(dCreateBoxtreeMesh(space.id, vd.data(), 4 * sizeof(double), 4, indices.data(), 4, 16), Error);
 }
@@ -375,8 +374,8 @@ TEST(OdeGeom, RayClosestHitsMatchOdeTrimesh) {
       EXPECT_LT((normal_of(ours[0]) - normal_of(theirs[0])).norm(), 1e-5) << "ray " << i;
     }
   }
-  std::printf("[ rays     ] %d rays, %d hits, %d on a shared edge with a different facet, %d hit by one only\n",
-              rays, hits, facet_mismatches, only_one_hits);
+  std::printf("[ rays     ] %d rays, %d hits, %d on a shared edge with a different facet, %d hit by one only\n", rays,
+              hits, facet_mismatches, only_one_hits);
   EXPECT_GT(hits, rays / 3);
   EXPECT_LE(facet_mismatches, hits / 100 + 1);
   EXPECT_LE(only_one_hits, rays / 500 + 1);
@@ -468,8 +467,8 @@ TEST(OdeGeom, ConvexWithRegisteredPoints) {
   dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
   // A cube of half size 0.5 as a dConvex: planes (n, d), points, polygons.
   static const dReal planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
-  static const dReal points[] = {0.5,  0.5,  0.5, -0.5, 0.5,  0.5, -0.5, -0.5, 0.5,  0.5,  -0.5, 0.5,
-                                 0.5,  0.5,  -0.5, -0.5, 0.5,  -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+  static const dReal points[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
+                                 0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
   static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
                                       4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
   dGeomID convex = boxtree::ode::create_convex(space.id, planes, 6, points, 8, polygons);
@@ -504,9 +503,10 @@ TEST(OdeGeom, ConvexWithRegisteredPoints) {
 // reason; create_convex then leaves nothing in the space.
 TEST(OdeGeom, ConvexWithBadFacesIsRefused) {
   Space space;
-  static const dReal points[] = {0.5,  0.5,  0.5, -0.5, 0.5,  0.5, -0.5, -0.5, 0.5,  0.5,  -0.5, 0.5,
-                                 0.5,  0.5,  -0.5, -0.5, 0.5,  -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
-  const std::vector<dReal> planes = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+  static const dReal points[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
+                                 0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+  const std::vector<dReal> planes = {1, 0,  0, 0.5, -1, 0, 0, 0.5, 0, 1, 0,  0.5,
+                                     0, -1, 0, 0.5, 0,  0, 1, 0.5, 0, 0, -1, 0.5};
   const std::vector<unsigned> polygons = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
                                           4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
   const auto refused = [&](const std::vector<dReal>& pl, const std::vector<unsigned>& po, unsigned plane_count,

@@ -35,8 +35,8 @@ std::string format(const char* kind, int number, const char* message, va_list ar
 }
 
 [[noreturn]] void boxtree_assert(const char* expression, const char* file, int line, const char* message) {
-  throw std::logic_error(std::string("BOXTREE_ASSERT failed: ") + message + " (" + expression + ") at " + file +
-                         ":" + std::to_string(line));
+  throw std::logic_error(std::string("BOXTREE_ASSERT failed: ") + message + " (" + expression + ") at " + file + ":" +
+                         std::to_string(line));
 }
 }  // namespace
 

@@ -88,7 +88,8 @@ TEST(Partition, RejectsOverlapsNamingBothRectangles) {
   duplicate.push_back(duplicate[0]);
   expect_invalid(duplicate, {"overlap"});
   // Overlap without a shared coordinate: a small square inside a big one.
-  expect_invalid({Rect::from_bounds(0, 0, 1, 1), Rect::from_bounds(0.2, 0.2, 0.3, 0.3)}, {"rectangles 0", "and 1", "overlap"});
+  expect_invalid({Rect::from_bounds(0, 0, 1, 1), Rect::from_bounds(0.2, 0.2, 0.3, 0.3)},
+                 {"rectangles 0", "and 1", "overlap"});
 }
 
 TEST(Partition, RejectsGaps) {
@@ -118,7 +119,10 @@ TEST(Partition, RandomPerturbationsAgreeWithBruteForce) {
     Rect& victim = cells[random.next() % cells.size()];
     const Rect& donor = cells[random.next() % cells.size()];
     const int axis = int(random.next() % 2);
-    if (random.next() % 2) victim.min[axis] = donor.max[axis]; else victim.max[axis] = donor.min[axis];
+    if (random.next() % 2)
+      victim.min[axis] = donor.max[axis];
+    else
+      victim.max[axis] = donor.min[axis];
     if (!(victim.min.x() < victim.max.x() && victim.min.y() < victim.max.y())) continue;
     bool accepted = true;
     try {

@@ -29,7 +29,8 @@ struct Case {
 std::vector<Case> cases() {
   std::vector<Case> out;
   for (const std::string& name : partition_generator_names())
-    for (std::size_t count : {std::size_t(1), std::size_t(2), std::size_t(5), std::size_t(9), std::size_t(64), scaled(700), scaled(3000)})
+    for (std::size_t count :
+         {std::size_t(1), std::size_t(2), std::size_t(5), std::size_t(9), std::size_t(64), scaled(700), scaled(3000)})
       out.push_back({name, count, 1000 + count});
   return out;
 }
@@ -50,9 +51,9 @@ void check_build(const std::vector<Rect>& cells, const std::string& what) {
   std::size_t done = 0;
   for (std::size_t r = 0; r < stats.rounds.size(); ++r) {
     const PlanarRoundStats& round = stats.rounds[r];
-    EXPECT_GE(12 * round.pairs, round.cells + 3) << "round " << r << " of " << round.cells << " cells paired "
-                                                 << round.pairs << " (" << round.low_degree_segments
-                                                 << " low-degree segments, " << round.offers << " offers)";
+    EXPECT_GE(12 * round.pairs, round.cells + 3)
+        << "round " << r << " of " << round.cells << " cells paired " << round.pairs << " ("
+        << round.low_degree_segments << " low-degree segments, " << round.offers << " offers)";
     std::set<std::uint32_t> used;
     for (std::size_t k = done; k < done + round.pairs; ++k) {
       for (std::uint32_t child : {merges[k].first, merges[k].second}) {
@@ -73,7 +74,8 @@ void check_build(const std::vector<Rect>& cells, const std::string& what) {
 }
 
 TEST(PlanarTree, PairingInvariantsOnEveryGenerator) {
-  for (const Case& c : cases()) check_build(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
+  for (const Case& c : cases())
+    check_build(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
 }
 
 TEST(PlanarTree, PairingInvariantsOnManySmallPartitions) {
@@ -119,7 +121,8 @@ void check_locate(const std::vector<Rect>& cells, const std::string& what) {
 }
 
 TEST(PlanarTree, PointLocationMatchesBruteForceOnEveryGenerator) {
-  for (const Case& c : cases()) check_locate(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
+  for (const Case& c : cases())
+    check_locate(make_partition(c.generator, c.count, c.seed), c.generator + " " + std::to_string(c.count));
 }
 
 TEST(PlanarTree, PointLocationOnAGridCellCorners) {

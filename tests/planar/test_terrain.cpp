@@ -6,12 +6,12 @@
 #include <algorithm>
 
 #include "boxtree/build.h"
+#include "boxtree/detail/volume_kinds.h"
 #include "boxtree/error.h"
 #include "boxtree/generate.h"
 #include "boxtree/planar/planar_tree.h"
 #include "boxtree/planar/terrain.h"
 #include "boxtree/query.h"
-#include "boxtree/detail/volume_kinds.h"
 #include "support/brute_force.h"
 
 namespace boxtree {

@@ -19,7 +19,8 @@ inline std::vector<RayHit> brute_ray_all_hits(const TriangleMesh& mesh, const Ra
     if (intersect_ray_triangle(ray, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), h))
       hits.push_back({f, h.t, h.u, h.v});
   }
-  std::sort(hits.begin(), hits.end(), [](const RayHit& a, const RayHit& b) { return a.t != b.t ? a.t < b.t : a.facet < b.facet; });
+  std::sort(hits.begin(), hits.end(),
+            [](const RayHit& a, const RayHit& b) { return a.t != b.t ? a.t < b.t : a.facet < b.facet; });
   return hits;
 }
 
@@ -52,7 +53,8 @@ inline std::vector<FacetId> brute_plane(const TriangleMesh& mesh, const Plane& p
   return out;
 }
 
-inline std::vector<FacetPair> brute_collide(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b) {
+inline std::vector<FacetPair> brute_collide(const TriangleMesh& a, const TriangleMesh& b,
+                                            const RigidTransform& a_from_b) {
   std::vector<Vec3> moved(b.vertices.size());
   for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = a_from_b.apply(b.vertices[i]);
   std::vector<FacetPair> out;

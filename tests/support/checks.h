@@ -264,5 +264,4 @@ inline Vec3 inside_point(const TriangleMesh& mesh) {
   return Vec3::Zero();
 }
 
-
 }  // namespace boxtree::test

@@ -22,20 +22,30 @@ inline bool shared_meshes_available() { return std::filesystem::exists(shared_me
 
 // Every shared mesh, by file name.
 inline std::vector<std::string> shared_mesh_names() {
-  return {"stanford_bunny.obj",        "stanford_bunny_res2.obj",   "stanford_bunny_res3.obj",
-          "stanford_bunny_res4.obj",   "bunny_libigl_closed.obj",   "ode_bunny.obj",
-          "stanford_armadillo_86k.obj", "stanford_dragon_res3.obj", "utah_teapot.obj",
-          "suzanne.obj",               "spot.obj",                  "env.obj",
-          "rob.obj",                   "bullet_diff_ring.obj",      "bullet_kiva_pod_lowres.obj",
+  return {"stanford_bunny.obj",
+          "stanford_bunny_res2.obj",
+          "stanford_bunny_res3.obj",
+          "stanford_bunny_res4.obj",
+          "bunny_libigl_closed.obj",
+          "ode_bunny.obj",
+          "stanford_armadillo_86k.obj",
+          "stanford_dragon_res3.obj",
+          "utah_teapot.obj",
+          "suzanne.obj",
+          "spot.obj",
+          "env.obj",
+          "rob.obj",
+          "bullet_diff_ring.obj",
+          "bullet_kiva_pod_lowres.obj",
           "bullet_leoTest1.obj"};
 }
 
 inline TriangleMesh load_shared_mesh(const std::string& name) { return load_mesh(shared_mesh_dir() + "/" + name); }
 
-#define BOXTREE_REQUIRE_SHARED_MESHES()                                                                  \
-  do {                                                                                                   \
+#define BOXTREE_REQUIRE_SHARED_MESHES()                                                                 \
+  do {                                                                                                  \
     if (!::boxtree::test::shared_meshes_available())                                                    \
-      GTEST_SKIP() << "real meshes not found in " << ::boxtree::test::shared_mesh_dir() << ": skipped";  \
+      GTEST_SKIP() << "real meshes not found in " << ::boxtree::test::shared_mesh_dir() << ": skipped"; \
   } while (false)
 
 // Multiplies test sizes (env BOXTREE_TEST_SCALE, default 1) for longer local runs.
@@ -50,7 +60,8 @@ inline TriangleMesh make_cone(int sides) {
   TriangleMesh mesh;
   const double pi = std::acos(-1.0);
   mesh.vertices.push_back(Vec3(0, 0, 1));
-  for (int i = 0; i < sides; ++i) mesh.vertices.push_back(Vec3(std::cos(2 * pi * i / sides), std::sin(2 * pi * i / sides), 0));
+  for (int i = 0; i < sides; ++i)
+    mesh.vertices.push_back(Vec3(std::cos(2 * pi * i / sides), std::sin(2 * pi * i / sides), 0));
   mesh.vertices.push_back(Vec3(0, 0, 0));
   const VertexId base = VertexId(sides + 1);
   for (int i = 0; i < sides; ++i) {

@@ -27,7 +27,9 @@ struct Random {
   int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine); }
   Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine); }
   bool chance(Real p) { return uniform(0, 1) < p; }
-  Real grid(int lo, int hi, int denominator = 1) { return Real(integer(lo * denominator, hi * denominator)) / denominator; }
+  Real grid(int lo, int hi, int denominator = 1) {
+    return Real(integer(lo * denominator, hi * denominator)) / denominator;
+  }
   Vec3 grid_point(int lo, int hi, int denominator = 1) {
     const Real x = grid(lo, hi, denominator);
     const Real y = grid(lo, hi, denominator);

@@ -143,8 +143,8 @@ struct AnyTree::Model final : AnyTree::Concept {
   void query_overlap(const Capsule& q, FunctionRef<bool(FacetId)> v, QueryStats* s, FacetTest t) const override {
     boxtree::query_overlap(tree, q, v, s, t);
   }
-  void collide(const Concept& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> v,
-               QueryStats* s, const CollideSettings& c) const override {
+  void collide(const Concept& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> v, QueryStats* s,
+               const CollideSettings& c) const override {
     boxtree::collide(tree, static_cast<const Model&>(b).tree, a_from_b, v, s, c);
   }
 };

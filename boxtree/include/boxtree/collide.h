@@ -25,7 +25,8 @@ struct CollideSettings {
 // `visit` returns false to stop.
 template <class Volume>
 void collide(const Tree<Volume>& a, const Tree<Volume>& b, const RigidTransform& a_from_b,
-             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats = nullptr, const CollideSettings& settings = {});
+             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats = nullptr,
+             const CollideSettings& settings = {});
 
 // Convenience: all pairs (or the first, with stop_at_first), sorted.
 template <class Volume>

@@ -75,8 +75,8 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
 // Face cases report a patch (each point at its own depth along the normal; the deepest one is the
 // penetration along that normal); edge-edge cases one point. Apart (within the margin): the exact
 // gap; a patch when the gap is along a face normal, else the closest pair.
-int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c,
-                         const ContactOptions& options, ContactPoint* out);
+int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options,
+                         ContactPoint* out);
 
 // A convex polyhedron with known faces (convex_polyhedron.h), in the triangle's frame: the same
 // separating axes as the box (its faces, the triangle's normal, edge x triangle edge: by parallel
@@ -125,7 +125,7 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
 
 // Support mappings of the shapes engines hand us, for contact_convex_triangle.
 Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& direction);  // axis p0-p1
-Vec3 support_points(const std::vector<Vec3>& points, const Vec3& direction);              // convex hull of points
+Vec3 support_points(const std::vector<Vec3>& points, const Vec3& direction);                // convex hull of points
 
 // Two triangles (mesh vs mesh): contacts when they intersect or are within the margin. The normal
 // points from triangle b towards triangle a; positions are on triangle b.

@@ -13,7 +13,7 @@
 namespace boxtree {
 
 class Error : public std::runtime_error {
-public:
+ public:
   using std::runtime_error::runtime_error;
 };
 
@@ -28,7 +28,7 @@ namespace detail {
 
 }  // namespace boxtree
 
-#define BOXTREE_ASSERT(cond, message)                                               \
-  do {                                                                              \
+#define BOXTREE_ASSERT(cond, message)                                                  \
+  do {                                                                                 \
     if (!(cond)) ::boxtree::detail::assert_failed(#cond, __FILE__, __LINE__, message); \
   } while (false)

@@ -31,7 +31,7 @@ TriangleMesh make_triangle_soup(std::size_t count, std::uint64_t seed, Real exte
 
 // Deterministic random numbers (splitmix64): the same sequence everywhere.
 class Random {
-public:
+ public:
   explicit Random(std::uint64_t seed) : state_(seed) {}
   std::uint64_t next() {
     std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
@@ -46,7 +46,7 @@ public:
   // Uniform on the unit sphere.
   Vec3 unit_vector();
 
-private:
+ private:
   std::uint64_t state_;
 };
 

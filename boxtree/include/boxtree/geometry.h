@@ -36,8 +36,8 @@ bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a
 
 // Triangle/triangle intersection (closed: touching at a point counts). Handles coplanar and
 // degenerate triangles (Guigue & Devillers 2003, with coplanar and degenerate fallbacks).
-bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2,
-                         const Vec3& b0, const Vec3& b1, const Vec3& b2);
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2);
 
 // Separating-axis test of a triangle against a closed box (Akenine-Moller 2001, 13 axes).
 bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box);
@@ -70,8 +70,7 @@ Obb swept_box(const Vec3& from, const Vec3& to, const Vec3& half);
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 // Closest points of the segments [p0,p1] and [q0,q1] (Ericson 5.1.9), stable for nearly parallel
 // and zero-length segments.
-void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
-                                Vec3& on_q);
+void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p, Vec3& on_q);
 // Squared distance between segments [p0,p1] and [q0,q1] (Ericson 5.1.9), robust for zero-length segments.
 Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1);
 // Squared distance between a segment and a triangle (0 if they intersect).

@@ -52,14 +52,22 @@ decltype(auto) with_method(const Method& method, F&& f) {
     }
   };
   switch (method.kind) {
-    case VolumeKind::obb_all: return pick(VolumeTag<ObbAll>{});
-    case VolumeKind::obb_max: return pick(VolumeTag<ObbMax>{});
-    case VolumeKind::obb_min: return pick(VolumeTag<ObbMin>{});
-    case VolumeKind::pie_max: return pick(VolumeTag<PieMax>{});
-    case VolumeKind::pie_min: return pick(VolumeTag<PieMin>{});
-    case VolumeKind::pie_max_general: return pick(VolumeTag<PieMaxGeneral>{});
-    case VolumeKind::pie_min_general: return pick(VolumeTag<PieMinGeneral>{});
-    case VolumeKind::aabb: break;
+    case VolumeKind::obb_all:
+      return pick(VolumeTag<ObbAll>{});
+    case VolumeKind::obb_max:
+      return pick(VolumeTag<ObbMax>{});
+    case VolumeKind::obb_min:
+      return pick(VolumeTag<ObbMin>{});
+    case VolumeKind::pie_max:
+      return pick(VolumeTag<PieMax>{});
+    case VolumeKind::pie_min:
+      return pick(VolumeTag<PieMin>{});
+    case VolumeKind::pie_max_general:
+      return pick(VolumeTag<PieMaxGeneral>{});
+    case VolumeKind::pie_min_general:
+      return pick(VolumeTag<PieMinGeneral>{});
+    case VolumeKind::aabb:
+      break;
   }
   return pick(VolumeTag<Aabb>{});
 }

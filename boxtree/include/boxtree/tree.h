@@ -24,7 +24,7 @@ using NodeIndex = std::uint32_t;
 
 template <class Volume>
 class Tree {
-public:
+ public:
   // Bit 31 set: a leaf, the low bits are its facet id. Clear: an inner node, the low bits are
   // the index of its first child (the second is first + 1).
   static constexpr std::uint32_t kLeafFlag = 0x80000000u;
@@ -61,10 +61,10 @@ public:
     return volumes_.capacity() * sizeof(Volume) + links_.capacity() * sizeof(std::uint32_t);
   }
 
-private:
+ private:
   std::shared_ptr<const TriangleMesh> mesh_;
-  std::vector<Volume> volumes_;         // hot: one per node
-  std::vector<std::uint32_t> links_;    // 4 B per node: first child or leaf flag | facet
+  std::vector<Volume> volumes_;       // hot: one per node
+  std::vector<std::uint32_t> links_;  // 4 B per node: first child or leaf flag | facet
   int height_ = 0;
 };
 

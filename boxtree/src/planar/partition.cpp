@@ -80,7 +80,8 @@ void check_no_gaps(const std::vector<Rect>& rects, const Rect& domain) {
   events.push_back({domain.min.x(), domain.max.y(), +1});
   events.push_back({domain.max.x(), domain.min.y(), +1});
   events.push_back({domain.max.x(), domain.max.y(), -1});
-  std::sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+  std::sort(events.begin(), events.end(),
+            [](const Event& a, const Event& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
   for (std::size_t i = 0; i < events.size();) {
     const Real x = events[i].x;
     int sum = 0;
@@ -91,9 +92,9 @@ void check_no_gaps(const std::vector<Rect>& rects, const Rect& domain) {
         const Real y_next = (i < events.size() && events[i].x == x) ? events[i].y : y;
         std::ostringstream out;
         out.precision(17);
-        out << "planar partition: the rectangles leave a gap " << (sum > 0 ? "left" : "right") << " of the segment x = " << x
-            << ", y in [" << y << ", " << y_next << "] (the cells do not tile their bounding rectangle "
-            << describe(domain) << ")";
+        out << "planar partition: the rectangles leave a gap " << (sum > 0 ? "left" : "right")
+            << " of the segment x = " << x << ", y in [" << y << ", " << y_next
+            << "] (the cells do not tile their bounding rectangle " << describe(domain) << ")";
         throw Error(out.str());
       }
     }
@@ -185,11 +186,11 @@ std::vector<Rect> make_pinwheel_partition(std::size_t count, std::uint64_t seed)
     const Real c = r.min.y() + random.uniform(0.2, 0.45) * r.height();
     const Real d = r.min.y() + random.uniform(0.55, 0.8) * r.height();
     if (!(r.min.x() < a && a < b && b < r.max.x() && r.min.y() < c && c < d && d < r.max.y())) continue;
-    cells[index] = Rect::from_bounds(a, c, b, d);                                   // centre
-    cells.push_back(Rect::from_bounds(r.min.x(), r.min.y(), b, c));                // bottom
-    cells.push_back(Rect::from_bounds(b, r.min.y(), r.max.x(), d));                // right
-    cells.push_back(Rect::from_bounds(a, d, r.max.x(), r.max.y()));                // top
-    cells.push_back(Rect::from_bounds(r.min.x(), c, a, r.max.y()));                // left
+    cells[index] = Rect::from_bounds(a, c, b, d);                    // centre
+    cells.push_back(Rect::from_bounds(r.min.x(), r.min.y(), b, c));  // bottom
+    cells.push_back(Rect::from_bounds(b, r.min.y(), r.max.x(), d));  // right
+    cells.push_back(Rect::from_bounds(a, d, r.max.x(), r.max.y()));  // top
+    cells.push_back(Rect::from_bounds(r.min.x(), c, a, r.max.y()));  // left
   }
   while (cells.size() < count) {
     const std::size_t index = std::size_t(random.next() % cells.size());

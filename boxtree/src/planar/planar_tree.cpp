@@ -153,8 +153,8 @@ ColourResult pair_across_vertical_segments(const std::vector<Rect>& cells, const
       const Real lo = cv.cut_max ? (role[cv.cell] == 2 ? new_min[cv.cell] : cells[cv.cell].min.x()) : cv.at;
       const Real hi = cv.cut_max ? cv.at : (role[cv.cell] == 2 ? new_max[cv.cell] : cells[cv.cell].max.x());
       if (!(lo < hi)) return;
-      if (role[cv.cell] == 2 && (cv.cut_max ? new_max[cv.cell] != cells[cv.cell].max.x()
-                                            : new_min[cv.cell] != cells[cv.cell].min.x()))
+      if (role[cv.cell] == 2 &&
+          (cv.cut_max ? new_max[cv.cell] != cells[cv.cell].max.x() : new_min[cv.cell] != cells[cv.cell].min.x()))
         return;  // already cut on this side
     }
     role[offer.a] = role[offer.b] = 1;
@@ -190,8 +190,7 @@ ColourResult pair_across_vertical_segments(const std::vector<Rect>& cells, const
         // A cross: both sides start a new cell at this y (each side's cells end exactly here).
         const bool left_starts = e.left ? true : (k + 1 < j && edges[k + 1].left && edges[k + 1].y0 == e.y0);
         const bool right_starts = !e.left ? true : (k + 1 < j && !edges[k + 1].left && edges[k + 1].y0 == e.y0);
-        if (left_starts && right_starts && cells[left.back()].max.y() == e.y0 &&
-            cells[right.back()].max.y() == e.y0) {
+        if (left_starts && right_starts && cells[left.back()].max.y() == e.y0 && cells[right.back()].max.y() == e.y0) {
           consider_segment();
           left.clear();
           right.clear();
@@ -305,7 +304,8 @@ std::vector<PlanarMerge> planar_pairing(std::vector<Rect> cells, const PlanarBui
 PlanarTree::PlanarTree(std::vector<Rect> cells, std::vector<Rect> boxes, std::vector<std::uint32_t> links, int height)
     : cells_(std::move(cells)), boxes_(std::move(boxes)), links_(std::move(links)), height_(height) {
   BOXTREE_ASSERT(boxes_.size() == links_.size(), "one box per node");
-  if (height_ > kMaxHeight) throw Error("planar boxtree: height " + std::to_string(height_) + " exceeds the query stack");
+  if (height_ > kMaxHeight)
+    throw Error("planar boxtree: height " + std::to_string(height_) + " exceeds the query stack");
 }
 
 PlanarTree build_planar_tree(std::vector<Rect> cells, const PlanarBuildSettings& settings, PlanarBuildStats* stats) {
@@ -399,12 +399,13 @@ namespace {
 // Range add, global max over the elementary y-intervals (no push-down: each node stores the
 // max of its subtree plus its own pending add).
 class MaxAddTree {
-public:
-  explicit MaxAddTree(std::size_t size) : size_(std::max<std::size_t>(size, 1)), max_(4 * size_, 0), add_(4 * size_, 0) {}
+ public:
+  explicit MaxAddTree(std::size_t size)
+      : size_(std::max<std::size_t>(size, 1)), max_(4 * size_, 0), add_(4 * size_, 0) {}
   void add(std::size_t lo, std::size_t hi, int delta) { add(1, 0, size_, lo, hi, delta); }  // [lo, hi)
   int max() const { return max_[1]; }
 
-private:
+ private:
   void add(std::size_t node, std::size_t l, std::size_t r, std::size_t lo, std::size_t hi, int delta) {
     if (hi <= l || r <= lo) return;
     if (lo <= l && r <= hi) {
@@ -473,9 +474,11 @@ void validate_planar_tree(const PlanarTree& tree) {
     const PlanarNode node = PlanarNode(i);
     if (tree.is_leaf(node)) {
       const RectId id = tree.cell_id(node);
-      if (id >= tree.cell_count() || seen_cell[id]) throw Error("planar tree: leaf " + std::to_string(i) + " has a bad or repeated cell");
+      if (id >= tree.cell_count() || seen_cell[id])
+        throw Error("planar tree: leaf " + std::to_string(i) + " has a bad or repeated cell");
       seen_cell[id] = 1;
-      if (tree.box(node) != tree.cell(id)) throw Error("planar tree: leaf " + std::to_string(i) + "'s box is not its cell");
+      if (tree.box(node) != tree.cell(id))
+        throw Error("planar tree: leaf " + std::to_string(i) + "'s box is not its cell");
       continue;
     }
     const PlanarNode c = tree.first_child(node);

@@ -6,11 +6,11 @@
 #include <chrono>
 #include <numeric>
 
+#include "../internal.h"
 #include "boxtree/detail/volume_kinds.h"
 #include "boxtree/error.h"
 #include "boxtree/planar/partition.h"
 #include "boxtree/planar/planar_tree.h"
-#include "../internal.h"
 
 namespace boxtree::planar {
 
@@ -28,7 +28,8 @@ TerrainCells terrain_cells(const TriangleMesh& mesh) {
     const Rect& r = projected[f];
     return std::array<Real, 4>{r.min.x(), r.min.y(), r.max.x(), r.max.y()};
   };
-  std::sort(order.begin(), order.end(), [&](FacetId a, FacetId b) { return key(a) != key(b) ? key(a) < key(b) : a < b; });
+  std::sort(order.begin(), order.end(),
+            [&](FacetId a, FacetId b) { return key(a) != key(b) ? key(a) < key(b) : a < b; });
   TerrainCells out;
   out.cell_of_facet.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -60,7 +61,8 @@ Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, Bu
   std::vector<std::uint32_t> first(n, 0), second(n, 0);
   std::vector<int> heights(n, 0);
   volumes.reserve(2 * n - 1);
-  for (FacetId f = 0; f < n; ++f) volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  for (FacetId f = 0; f < n; ++f)
+    volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
   auto merge = [&](std::uint32_t a, std::uint32_t b) {
     volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
     first.push_back(a);
@@ -107,7 +109,8 @@ Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, Bu
   return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), height);
 }
 
-#define BOXTREE_INSTANTIATE_TERRAIN(V) template Tree<V> build_terrain_tree<V>(std::shared_ptr<const TriangleMesh>, BuildStats*);
+#define BOXTREE_INSTANTIATE_TERRAIN(V) \
+  template Tree<V> build_terrain_tree<V>(std::shared_ptr<const TriangleMesh>, BuildStats*);
 BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_TERRAIN)
 
 }  // namespace boxtree::planar

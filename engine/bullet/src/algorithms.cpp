@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "boxtree/bullet/algorithms.h"
 
-#include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 #include <BulletCollision/CollisionShapes/btConvexPolyhedron.h>
 #include <BulletCollision/CollisionShapes/btPolyhedralConvexShape.h>
@@ -43,7 +43,8 @@ std::unique_ptr<const ConvexPolyhedron> convert_polyhedron(const btConvexPolyhed
   for (int i = 0; i < source.m_vertices.size(); ++i) points.push_back(to_vec(source.m_vertices[i]));
   std::vector<std::vector<int>> faces(std::size_t(source.m_faces.size()));
   for (int f = 0; f < source.m_faces.size(); ++f)
-    for (int k = 0; k < source.m_faces[f].m_indices.size(); ++k) faces[std::size_t(f)].push_back(source.m_faces[f].m_indices[k]);
+    for (int k = 0; k < source.m_faces[f].m_indices.size(); ++k)
+      faces[std::size_t(f)].push_back(source.m_faces[f].m_indices[k]);
   try {
     return std::make_unique<const ConvexPolyhedron>(make_convex_polyhedron(points, faces));
   } catch (const Error&) {
@@ -76,7 +77,8 @@ void set_mesh_identifiers(btManifoldResult& result, bool mesh_is_result_b, int p
 // real result, correcting normals on inactive edges on the way. The per-triangle algorithm runs
 // in the order (convex, triangle), so its normals are on the triangle, pointing to the convex.
 struct EdgeCorrectingResult : btManifoldResult {
-  EdgeCorrectingResult(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1) : btManifoldResult(w0, w1) {}
+  EdgeCorrectingResult(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1)
+      : btManifoldResult(w0, w1) {}
   const BoxtreeMeshShape* mesh = nullptr;
   btTransform mesh_to_world;
   FacetId facet = 0;
@@ -90,7 +92,8 @@ struct EdgeCorrectingResult : btManifoldResult {
     const std::uint8_t active = mesh->activeEdges()[facet];
     // The common case, a two-sided mesh and no internal edge: the contact as GJK gave it, without
     // fetching the triangle.
-    if (mesh->isTwoSided() && active == 0x7) return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
+    if (mesh->isTwoSided() && active == 0x7)
+      return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
     btVector3 tri[3];
     mesh->scaledTriangle(facet, tri);
     const btVector3 front_local = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
@@ -101,7 +104,8 @@ struct EdgeCorrectingResult : btManifoldResult {
       // instead, by how far its deepest point along the front normal lies behind the facet's
       // plane (as the core's one-sided contacts do, ContactOptions::two_sided).
       const btVector3 front = front_local.normalized();
-      const btVector3 deepest = convex_in_mesh(convex->localGetSupportingVertex(-(convex_in_mesh.getBasis().transpose() * front)));
+      const btVector3 deepest =
+          convex_in_mesh(convex->localGetSupportingVertex(-(convex_in_mesh.getBasis().transpose() * front)));
       const btScalar behind = (tri[0] - deepest).dot(front);
       if (behind < 0) return;  // apart along the front normal: no contact from this side
       const btVector3 on_plane = deepest + front * behind;
@@ -113,8 +117,10 @@ struct EdgeCorrectingResult : btManifoldResult {
     c.normal = to_vec(mesh_to_world.getBasis().transpose() * normalOnBInWorld);
     c.position = to_vec(mesh_to_world.invXform(pointInWorld));
     switch (correct_internal_edge_contact(c, to_vec(tri[0]), to_vec(tri[1]), to_vec(tri[2]), active)) {
-      case EdgeContact::keep: return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
-      case EdgeContact::discard: return;
+      case EdgeContact::keep:
+        return btManifoldResult::addContactPoint(normalOnBInWorld, pointInWorld, depth);
+      case EdgeContact::discard:
+        return;
       case EdgeContact::corrected:
         btManifoldResult::addContactPoint(mesh_to_world.getBasis() * to_bt(c.normal), pointInWorld, -btScalar(c.depth));
     }
@@ -136,7 +142,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
                         const btDispatcherInfo& info, btManifoldResult* result) override {
     const btCollisionObjectWrapper* convex_wrap = m_swapped ? w1 : w0;
     const btCollisionObjectWrapper* mesh_wrap = m_swapped ? w0 : w1;
-    if (!m_manifold) m_manifold = m_dispatcher->getNewManifold(convex_wrap->getCollisionObject(), mesh_wrap->getCollisionObject());
+    if (!m_manifold)
+      m_manifold = m_dispatcher->getNewManifold(convex_wrap->getCollisionObject(), mesh_wrap->getCollisionObject());
     result->setPersistentManifold(m_manifold);
 
     const BoxtreeMeshShape& mesh = mesh_shape(mesh_wrap);
@@ -146,26 +153,30 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     // Contacts are wanted up to the manifold's breaking distance (as Bullet's GJK reports them),
     // with the triangles thickened by the mesh's margin.
     const Real mesh_margin = Real(mesh.getMargin());
-    const Real reach = Real(m_manifold->getContactBreakingThreshold() + result->m_closestPointDistanceThreshold) + mesh_margin;
+    const Real reach =
+        Real(m_manifold->getContactBreakingThreshold() + result->m_closestPointDistanceThreshold) + mesh_margin;
     const bool mesh_is_result_b = result->getBody1Internal() == mesh_wrap->getCollisionObject();
 
     const int type = convex->getShapeType();
     // Hulls (and other polyhedral shapes but boxes) whose faces Bullet has computed.
-    const ConvexPolyhedron* hull = m_settings->analyticContacts && m_settings->hullFaces && type != BOX_SHAPE_PROXYTYPE &&
-                                           convex->isPolyhedral()
-                                       ? polyhedronOf(*convex)
-                                       : nullptr;
-    const bool analytic = m_settings->analyticContacts && mesh.hasUnitScaling() &&
-                          (type == SPHERE_SHAPE_PROXYTYPE || type == BOX_SHAPE_PROXYTYPE || type == CAPSULE_SHAPE_PROXYTYPE || hull);
+    const ConvexPolyhedron* hull =
+        m_settings->analyticContacts && m_settings->hullFaces && type != BOX_SHAPE_PROXYTYPE && convex->isPolyhedral()
+            ? polyhedronOf(*convex)
+            : nullptr;
+    const bool analytic =
+        m_settings->analyticContacts && mesh.hasUnitScaling() &&
+        (type == SPHERE_SHAPE_PROXYTYPE || type == BOX_SHAPE_PROXYTYPE || type == CAPSULE_SHAPE_PROXYTYPE || hull);
     if (analytic) {
-      processAnalytic(mesh, *convex, hull, convex_in_mesh, mesh_to_world, reach, mesh_margin, mesh_is_result_b, *result);
+      processAnalytic(mesh, *convex, hull, convex_in_mesh, mesh_to_world, reach, mesh_margin, mesh_is_result_b,
+                      *result);
     } else {
       processGjk(mesh, *convex, convex_wrap, mesh_wrap, convex_in_mesh, reach, info, *result);
     }
     if (m_manifold->getNumContacts()) result->refreshContactPoints();
   }
 
-  btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&, btManifoldResult*) override {
+  btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,
+                                 btManifoldResult*) override {
     return 1;  // continuous collision against meshes goes through convexSweepTest (the fast sweep path)
   }
 
@@ -175,7 +186,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
 
   struct CreateFunc : btCollisionAlgorithmCreateFunc {
     const AlgorithmSettings* settings = nullptr;
-    btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* w0,
+    btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
+                                                   const btCollisionObjectWrapper* w0,
                                                    const btCollisionObjectWrapper* w1) override {
       void* memory = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(ConvexMeshAlgorithm));
       return new (memory) ConvexMeshAlgorithm(ci, w0, w1, m_swapped, settings);
@@ -188,9 +200,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   // routines give the contacts. Hulls take this path with AlgorithmSettings::hullFaces, once
   // Bullet has computed their polyhedral features (algorithms.h says what it gains and costs).
   void processAnalytic(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const ConvexPolyhedron* polyhedron,
-                       const btTransform& convex_in_mesh,
-                       const btTransform& mesh_to_world, Real reach, Real mesh_margin, bool mesh_is_result_b,
-                       btManifoldResult& result) {
+                       const btTransform& convex_in_mesh, const btTransform& mesh_to_world, Real reach,
+                       Real mesh_margin, bool mesh_is_result_b, btManifoldResult& result) {
     thread_local std::vector<ContactPoint> contacts;
     contacts.clear();
     ContactOptions options;
@@ -202,17 +213,20 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     const std::vector<std::uint8_t>& active = mesh.activeEdges();
     ContactPoint out[std::max(kMaxBoxTriangleContacts, kMaxPolyhedronTriangleContacts)];
     auto run = [&](const auto& query, auto&& contact_fn, FacetTest test = FacetTest::exact_triangle) {
-      mesh.tree().query_overlap(query, [&](FacetId f) {
-        mesh.countNarrowphaseTriangles(1);
-        const int n = contact_fn(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), out);
-        for (int i = 0; i < n; ++i) {
-          out[i].facet = f;
-          if (correct_internal_edge_contact(out[i], m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), active[f]) !=
-              EdgeContact::discard)
-            contacts.push_back(out[i]);
-        }
-        return true;
-      }, nullptr, test);
+      mesh.tree().query_overlap(
+          query,
+          [&](FacetId f) {
+            mesh.countNarrowphaseTriangles(1);
+            const int n = contact_fn(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), out);
+            for (int i = 0; i < n; ++i) {
+              out[i].facet = f;
+              if (correct_internal_edge_contact(out[i], m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), active[f]) !=
+                  EdgeContact::discard)
+                contacts.push_back(out[i]);
+            }
+            return true;
+          },
+          nullptr, test);
     };
     switch (convex.getShapeType()) {
       case SPHERE_SHAPE_PROXYTYPE: {
@@ -255,11 +269,15 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
         convex.getAabb(btTransform::getIdentity(), lo, hi);  // margin included, in the body's frame
         Obb box{to_vec(convex_in_mesh((lo + hi) * btScalar(0.5))), basis, to_vec((hi - lo) * btScalar(0.5))};
         box.half_extents.array() += reach;
-        run(box, [&](const Vec3& a, const Vec3& b, const Vec3& c, ContactPoint* o) {
-          const int n = contact_polyhedron_triangle(hull, a, b, c, hull_options, o);
-          for (int i = 0; i < n; ++i) o[i].depth += hull_margin;
-          return n;
-        }, FacetTest::leaf_volume);  // the hull's own axes reject what the box's triangle test would (as in the ODE adapter)
+        run(
+            box,
+            [&](const Vec3& a, const Vec3& b, const Vec3& c, ContactPoint* o) {
+              const int n = contact_polyhedron_triangle(hull, a, b, c, hull_options, o);
+              for (int i = 0; i < n; ++i) o[i].depth += hull_margin;
+              return n;
+            },
+            FacetTest::leaf_volume);  // the hull's own axes reject what the box's triangle test would (as in the ODE
+                                      // adapter)
         break;
       }
     }
@@ -277,9 +295,10 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   // as an oriented box (tighter than the axis-aligned box Bullet's own algorithm queries with),
   // picks the triangles; Bullet's own convex-triangle algorithm (GJK/EPA) gives the contacts,
   // exactly as in btConvexConcaveCollisionAlgorithm.
-  void processGjk(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const btCollisionObjectWrapper* convex_wrap,
-                  const btCollisionObjectWrapper* mesh_wrap, const btTransform& convex_in_mesh, Real reach,
-                  const btDispatcherInfo& info, btManifoldResult& result) {
+  void processGjk(const BoxtreeMeshShape& mesh, const btConvexShape& convex,
+                  const btCollisionObjectWrapper* convex_wrap, const btCollisionObjectWrapper* mesh_wrap,
+                  const btTransform& convex_in_mesh, Real reach, const btDispatcherInfo& info,
+                  btManifoldResult& result) {
     btVector3 lo, hi;
     convex.getAabb(btTransform::getIdentity(), lo, hi);  // in the body's own frame
     const bool mesh_is_result_b = result.getBody1Internal() == mesh_wrap->getCollisionObject();
@@ -319,7 +338,8 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
       mesh.facetToPart(f, part, index);
       btCollisionObjectWrapper tri_wrap(mesh_wrap, &triangle, mesh_wrap->getCollisionObject(),
                                         mesh_wrap->getWorldTransform(), part, index);
-      btCollisionAlgorithm* algorithm = m_dispatcher->findAlgorithm(convex_wrap, &tri_wrap, m_manifold, BT_CONTACT_POINT_ALGORITHMS);
+      btCollisionAlgorithm* algorithm =
+          m_dispatcher->findAlgorithm(convex_wrap, &tri_wrap, m_manifold, BT_CONTACT_POINT_ALGORITHMS);
       corrected.facet = f;
       // The result sees the triangle in the mesh's place; the algorithm was found for the order
       // (convex, triangle) and is always called in that order (the result handles the swap).
@@ -350,7 +370,9 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
       struct Collect : btTriangleCallback {
         std::vector<FacetId> facets;
         const BoxtreeMeshShape* shape = nullptr;
-        void processTriangle(btVector3*, int part, int index) override { facets.push_back(shape->partToFacet(part, index)); }
+        void processTriangle(btVector3*, int part, int index) override {
+          facets.push_back(shape->partToFacet(part, index));
+        }
       } collect;
       collect.shape = &mesh;
       mesh.processAllTriangles(&collect, wlo - grow, whi + grow);
@@ -415,7 +437,7 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
     // upward faces.
     const FixedSurface fixed = w0->getCollisionObject()->isStaticOrKinematicObject()   ? FixedSurface::a
                                : w1->getCollisionObject()->isStaticOrKinematicObject() ? FixedSurface::b
-                                                                                      : FixedSurface::neither;
+                                                                                       : FixedSurface::neither;
     const TriangleMesh& ma = a.mesh();
     const TriangleMesh& mb = b.mesh();
     ContactPoint out[kMaxTriangleFaceContacts];
@@ -457,7 +479,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
     result->refreshContactPoints();
   }
 
-  btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&, btManifoldResult*) override {
+  btScalar calculateTimeOfImpact(btCollisionObject*, btCollisionObject*, const btDispatcherInfo&,
+                                 btManifoldResult*) override {
     return 1;
   }
   void getAllContactManifolds(btManifoldArray& manifolds) override {
@@ -465,7 +488,8 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
   }
 
   struct CreateFunc : btCollisionAlgorithmCreateFunc {
-    btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* w0,
+    btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
+                                                   const btCollisionObjectWrapper* w0,
                                                    const btCollisionObjectWrapper* w1) override {
       void* memory = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(MeshMeshAlgorithm));
       return new (memory) MeshMeshAlgorithm(ci, w0, w1);
@@ -478,7 +502,9 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
 
 }  // namespace
 
-int boxtreeAlgorithmMaxSize() { return static_cast<int>(std::max(sizeof(ConvexMeshAlgorithm), sizeof(MeshMeshAlgorithm))); }
+int boxtreeAlgorithmMaxSize() {
+  return static_cast<int>(std::max(sizeof(ConvexMeshAlgorithm), sizeof(MeshMeshAlgorithm)));
+}
 
 void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const AlgorithmSettings& settings) {
   if (!dispatcher) throw Error("registerBoxtreeAlgorithms: null dispatcher");

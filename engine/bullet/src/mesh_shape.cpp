@@ -17,10 +17,14 @@ namespace {
 // Reads index k of a face from a Bullet index array of any of its integer types.
 VertexId read_index(const unsigned char* face, PHY_ScalarType type, int k) {
   switch (type) {
-    case PHY_INTEGER: return static_cast<VertexId>(reinterpret_cast<const int*>(face)[k]);
-    case PHY_SHORT: return reinterpret_cast<const unsigned short*>(face)[k];
-    case PHY_UCHAR: return face[k];
-    default: throw Error("BoxtreeMeshShape: unsupported index type in btStridingMeshInterface");
+    case PHY_INTEGER:
+      return static_cast<VertexId>(reinterpret_cast<const int*>(face)[k]);
+    case PHY_SHORT:
+      return reinterpret_cast<const unsigned short*>(face)[k];
+    case PHY_UCHAR:
+      return face[k];
+    default:
+      throw Error("BoxtreeMeshShape: unsupported index type in btStridingMeshInterface");
   }
 }
 
@@ -47,15 +51,16 @@ std::shared_ptr<const TriangleMesh> copy_mesh(const btStridingMeshInterface& sou
     const unsigned char* indices = nullptr;
     int num_vertices = 0, vertex_stride = 0, index_stride = 0, num_faces = 0;
     PHY_ScalarType vertex_type = PHY_FLOAT, index_type = PHY_INTEGER;
-    source.getLockedReadOnlyVertexIndexBase(&vertices, num_vertices, vertex_type, vertex_stride, &indices,
-                                            index_stride, num_faces, index_type, part);
+    source.getLockedReadOnlyVertexIndexBase(&vertices, num_vertices, vertex_type, vertex_stride, &indices, index_stride,
+                                            num_faces, index_type, part);
     // Unlock on every exit path: the interface is the caller's and must be left as it was.
     struct Unlock {
       const btStridingMeshInterface& s;
       int part;
       ~Unlock() { s.unLockReadOnlyVertexBase(part); }
     } unlock{source, part};
-    if (num_faces < 0 || num_vertices < 0) throw Error("BoxtreeMeshShape: negative face or vertex count in part " + std::to_string(part));
+    if (num_faces < 0 || num_vertices < 0)
+      throw Error("BoxtreeMeshShape: negative face or vertex count in part " + std::to_string(part));
     const VertexId base = static_cast<VertexId>(mesh->vertices.size());
     for (int v = 0; v < num_vertices; ++v)
       mesh->vertices.push_back(read_vertex(vertices, vertex_stride, vertex_type, static_cast<VertexId>(v)));
@@ -113,8 +118,8 @@ void BoxtreeMeshShape::init() {
 }
 
 void BoxtreeMeshShape::setLocalScaling(const btVector3& scaling) {
-  if (!std::isfinite(double(scaling.x())) || !std::isfinite(double(scaling.y())) || !std::isfinite(double(scaling.z())) ||
-      scaling.x() == 0 || scaling.y() == 0 || scaling.z() == 0) {
+  if (!std::isfinite(double(scaling.x())) || !std::isfinite(double(scaling.y())) ||
+      !std::isfinite(double(scaling.z())) || scaling.x() == 0 || scaling.y() == 0 || scaling.z() == 0) {
     throw Error("BoxtreeMeshShape::setLocalScaling: scaling must be finite and non-zero");
   }
   m_localScaling = scaling;
@@ -138,8 +143,8 @@ void BoxtreeMeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) 
   // The inertia of the (scaled) bounding box, as btGImpactMeshShape does by default: meshes are
   // rarely closed or of known density, and a box keeps the solver stable.
   const btVector3 e = (m_localAabbMax - m_localAabbMin) * m_localScaling.absolute();
-  inertia = mass / btScalar(12) * btVector3(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(),
-                                           e.x() * e.x() + e.y() * e.y());
+  inertia = mass / btScalar(12) *
+            btVector3(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(), e.x() * e.x() + e.y() * e.y());
 }
 
 void BoxtreeMeshShape::facetToPart(FacetId facet, int& partId, int& triangleIndex) const {
@@ -219,15 +224,19 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
   // triangles that overlap the query box itself (their leaves are tighter than a triangle's box).
   // The packed tree's leaf boxes are a grid step or two larger than the triangles' own, so the
   // triangle, fetched for the callback anyway, is checked against the query box.
-  m_tree.query_overlap(box, [&](FacetId f) {
-    report(f, aabb_tree);
-    return true;
-  }, nullptr, aabb_tree ? FacetTest::leaf_volume : FacetTest::exact_triangle);
+  m_tree.query_overlap(
+      box,
+      [&](FacetId f) {
+        report(f, aabb_tree);
+        return true;
+      },
+      nullptr, aabb_tree ? FacetTest::leaf_volume : FacetTest::exact_triangle);
 }
 
 Aabb BoxtreeMeshShape::toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const {
   for (int i = 0; i < 3; ++i) {
-    if (std::isnan(double(aabbMin[i])) || std::isnan(double(aabbMax[i])) || aabbMin[i] > aabbMax[i]) return Aabb::empty();
+    if (std::isnan(double(aabbMin[i])) || std::isnan(double(aabbMax[i])) || aabbMin[i] > aabbMax[i])
+      return Aabb::empty();
   }
   const btVector3 inv(1 / m_localScaling.x(), 1 / m_localScaling.y(), 1 / m_localScaling.z());
   Aabb box = Aabb::from_points(to_vec(aabbMin * inv), to_vec(aabbMax * inv));
@@ -261,7 +270,8 @@ void BoxtreeMeshShape::sweepCandidates(btTriangleConvexcastCallback& cast, Funct
   auto collect = [&](FacetId f) {
     const TriangleMesh& m = m_tree.mesh();
     Real start = std::numeric_limits<Real>::infinity();
-    for (int k = 0; k < 3; ++k) start = std::min(start, (m.corner(f, k).cwiseProduct(to_vec(m_localScaling)) - c0).dot(axis));
+    for (int k = 0; k < 3; ++k)
+      start = std::min(start, (m.corner(f, k).cwiseProduct(to_vec(m_localScaling)) - c0).dot(axis));
     candidates.emplace_back(start, f);
     return true;
   };

@@ -104,21 +104,24 @@ int collide_convex_shape(dGeomID o1, dGeomID o2, int flags, dContactGeom* contac
   ContactPoint found[std::max({kMaxBoxTriangleContacts, kMaxPolyhedronTriangleContacts, kMaxCylinderTriangleContacts,
                                kMaxCapsuleTriangleContacts})];  // the largest per-facet count of the shapes here
   std::uint64_t candidates = 0;
-  object.tree.query_overlap(query, [&](FacetId facet) {
-    ++candidates;
-    const Vec3& a = mesh.corner(facet, 0);
-    const Vec3& b = mesh.corner(facet, 1);
-    const Vec3& c = mesh.corner(facet, 2);
-    const int n = per_facet(a, b, c, options, found);
-    for (int i = 0; i < n; ++i) {
-      found[i].facet = facet;
-      if (object.settings.internal_edges &&
-          correct_internal_edge_contact(found[i], a, b, c, object.active_edges[facet]) == EdgeContact::discard)
-        continue;  // beside this facet: its neighbour reports the real contact
-      contacts.push_back(found[i]);
-    }
-    return !(out.unimportant() && contacts.size() >= std::size_t(out.capacity()));
-  }, nullptr, test);
+  object.tree.query_overlap(
+      query,
+      [&](FacetId facet) {
+        ++candidates;
+        const Vec3& a = mesh.corner(facet, 0);
+        const Vec3& b = mesh.corner(facet, 1);
+        const Vec3& c = mesh.corner(facet, 2);
+        const int n = per_facet(a, b, c, options, found);
+        for (int i = 0; i < n; ++i) {
+          found[i].facet = facet;
+          if (object.settings.internal_edges &&
+              correct_internal_edge_contact(found[i], a, b, c, object.active_edges[facet]) == EdgeContact::discard)
+            continue;  // beside this facet: its neighbour reports the real contact
+          contacts.push_back(found[i]);
+        }
+        return !(out.unimportant() && contacts.size() >= std::size_t(out.capacity()));
+      },
+      nullptr, test);
   object.calls.fetch_add(1, std::memory_order_relaxed);
   object.candidate_facets.fetch_add(candidates, std::memory_order_relaxed);
   return write_contacts(object, out, world_from_mesh, contacts, merge_distance_for(object, shape_size), true, false);
@@ -245,11 +248,9 @@ int collide_convex(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int
   centroid /= Real(points.size());
   auto support = [&](const Vec3& direction) { return support_points(points, direction); };
   const ConvexSupport shape{support, centroid, true};
-  return collide_convex_shape(
-      o1, o2, flags, contact, skip, query, local.extent().norm() / 2, world_from_mesh,
-      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* found) {
-        return contact_convex_triangle(shape, a, b, c, o, found);
-      });
+  return collide_convex_shape(o1, o2, flags, contact, skip, query, local.extent().norm() / 2, world_from_mesh,
+                              [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o,
+                                  ContactPoint* found) { return contact_convex_triangle(shape, a, b, c, o, found); });
 }
 
 // ---- ray: as dCollideRTL (length, FirstContact, BackfaceCull, ClosestHit) ----
@@ -293,7 +294,8 @@ int collide_ray(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int sk
     if (backface_cull && (b - a).cross(c - a).dot(ray.direction) >= 0) return t_max;
     if (closest_hit) {
       // Keep the nearer (on a tie the smaller facet id, as ray_closest_hit does).
-      if (hits.empty() || hit.t < hits[0].t || (hit.t == hits[0].t && facet < hits[0].facet)) hits.assign(1, {hit.t, facet});
+      if (hits.empty() || hit.t < hits[0].t || (hit.t == hits[0].t && facet < hits[0].facet))
+        hits.assign(1, {hit.t, facet});
       return hit.t;
     }
     hits.push_back({hit.t, facet});
@@ -412,8 +414,8 @@ struct OtherMesh {
 // contacts; the least penetration per pair is what resting closed meshes need.
 // (contact_triangle_faces, face normals only, was tried: for a cube's side wall crossing a ground
 // facet of the same size it reports the wall's side, a deep horizontal contact.)
-int collide_meshes(GeomObject& object, const OtherMesh& other, dGeomID o1, dGeomID o2, int flags,
-                   dContactGeom* contact, int skip) {
+int collide_meshes(GeomObject& object, const OtherMesh& other, dGeomID o1, dGeomID o2, int flags, dContactGeom* contact,
+                   int skip) {
   const ContactArray out{o1, o2, flags, contact, skip};
   const RigidTransform world_from_mesh = pose_of(o1);
   const RigidTransform world_from_other = pose_of(o2);
@@ -506,15 +508,24 @@ int collide_trimesh(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, in
 
 dColliderFn* collider_for(int other_class) {
   switch (other_class) {
-    case dSphereClass: return &collide_sphere;
-    case dBoxClass: return &collide_box;
-    case dCapsuleClass: return &collide_capsule;
-    case dCylinderClass: return &collide_cylinder;
-    case dConvexClass: return &collide_convex;
-    case dRayClass: return &collide_ray;
-    case dPlaneClass: return &collide_plane;
-    case dTriMeshClass: return &collide_trimesh;
-    default: break;
+    case dSphereClass:
+      return &collide_sphere;
+    case dBoxClass:
+      return &collide_box;
+    case dCapsuleClass:
+      return &collide_capsule;
+    case dCylinderClass:
+      return &collide_cylinder;
+    case dConvexClass:
+      return &collide_convex;
+    case dRayClass:
+      return &collide_ray;
+    case dPlaneClass:
+      return &collide_plane;
+    case dTriMeshClass:
+      return &collide_trimesh;
+    default:
+      break;
   }
   if (other_class == dBoxtreeGetClass()) return &collide_boxtree;
   return nullptr;  // heightfields, other user classes: ODE then reports no contacts

@@ -83,8 +83,9 @@ std::shared_ptr<const TriangleMesh> mesh_from_arrays(const Scalar* vertices, int
                                                      const dTriIndex* indices, int index_count, int tri_stride) {
   if (!vertices || !indices || vertex_count <= 0 || index_count <= 0 || index_count % 3 != 0 ||
       vertex_stride < int(3 * sizeof(Scalar)) || tri_stride < int(3 * sizeof(dTriIndex))) {
-    throw Error("dCreateBoxtreeMesh: bad vertex/index arrays (need vertex_stride >= 3 coordinates, "
-                "tri_stride >= 3 indices, index_count a positive multiple of 3)");
+    throw Error(
+        "dCreateBoxtreeMesh: bad vertex/index arrays (need vertex_stride >= 3 coordinates, "
+        "tri_stride >= 3 indices, index_count a positive multiple of 3)");
   }
   auto mesh = std::make_shared<TriangleMesh>();
   mesh->vertices.reserve(std::size_t(vertex_count));
@@ -180,8 +181,7 @@ std::shared_ptr<const TrimeshTree> trimesh_tree(dGeomID trimesh, const Method& m
   {
     std::lock_guard<std::mutex> lock(g_trimesh_mutex);
     auto it = g_trimesh_trees.find(key);
-    if (it != g_trimesh_trees.end() && trimesh_entry_matches(*it->second, trimesh, local_from_world))
-      return it->second;
+    if (it != g_trimesh_trees.end() && trimesh_entry_matches(*it->second, trimesh, local_from_world)) return it->second;
   }
   const int count = dGeomTriMeshGetTriangleCount(trimesh);
   if (count <= 0) return nullptr;
@@ -233,9 +233,7 @@ void dBoxtreeClose() {
   g_class = -1;
 }
 
-int dBoxtreeGetClass() {
-  return g_class.load();
-}
+int dBoxtreeGetClass() { return g_class.load(); }
 
 dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::TriangleMesh> mesh, const char* method) {
   if (!mesh) throw boxtree::Error("dCreateBoxtreeMesh: no mesh");
@@ -249,18 +247,18 @@ dGeomID dCreateBoxtreeMesh(dSpaceID space, const boxtree::AnyTree& tree) {
 
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const double* vertices, int vertex_stride, int vertex_count,
                            const dTriIndex* indices, int index_count, int tri_stride, const char* method) {
-  return dCreateBoxtreeMesh(space,
-                            boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices,
-                                                                   index_count, tri_stride),
-                            method);
+  return dCreateBoxtreeMesh(
+      space,
+      boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices, index_count, tri_stride),
+      method);
 }
 
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const float* vertices, int vertex_stride, int vertex_count,
                            const dTriIndex* indices, int index_count, int tri_stride, const char* method) {
-  return dCreateBoxtreeMesh(space,
-                            boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices,
-                                                                   index_count, tri_stride),
-                            method);
+  return dCreateBoxtreeMesh(
+      space,
+      boxtree::ode::detail::mesh_from_arrays(vertices, vertex_stride, vertex_count, indices, index_count, tri_stride),
+      method);
 }
 
 namespace boxtree::ode {
@@ -373,8 +371,8 @@ std::shared_ptr<const detail::ConvexEntry> convex_entry_of(const dReal* planes, 
       on_plane = on_plane && std::abs(n.dot(entry->points[std::size_t(corner)]) - planes[4 * f + 3]) <=
                                  1e-6 * polyhedron.size * length;
     if (!(length > 0) || !n.allFinite() || n.dot(face.normal) < (1 - 1e-6) * length || !on_plane)
-      throw Error("boxtree::ode::set_convex: plane " + std::to_string(f) +
-                  " is not the outward plane of polygon " + std::to_string(f));
+      throw Error("boxtree::ode::set_convex: plane " + std::to_string(f) + " is not the outward plane of polygon " +
+                  std::to_string(f));
   }
   entry->polyhedron = std::make_unique<const ConvexPolyhedron>(std::move(polyhedron));
   return entry;

@@ -14,7 +14,7 @@ namespace boxtree::ode::detail {
 // holds only this pointer; the object is made with new and deleted by the class destructor).
 struct GeomObject {
   AnyTree tree;
-  Aabb local_bounds;  // of the mesh, in the geom's frame (AnyTree::bounds() walks every facet)
+  Aabb local_bounds;                       // of the mesh, in the geom's frame (AnyTree::bounds() walks every facet)
   std::vector<std::uint8_t> active_edges;  // per facet, boxtree/active_edges.h
   GeomSettings settings;
   std::atomic<std::uint64_t> calls{0};

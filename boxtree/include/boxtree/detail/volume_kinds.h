@@ -6,21 +6,21 @@
 #include "boxtree/volume/volume.h"
 
 #define BOXTREE_FOR_EACH_ORIENTED_VOLUME(X) \
-  X(ObbAll)                            \
-  X(ObbMax)                            \
-  X(ObbMin)                            \
-  X(PieMax)                            \
-  X(PieMin)                            \
-  X(PieMaxGeneral)                     \
+  X(ObbAll)                                 \
+  X(ObbMax)                                 \
+  X(ObbMin)                                 \
+  X(PieMax)                                 \
+  X(PieMin)                                 \
+  X(PieMaxGeneral)                          \
   X(PieMinGeneral)
 
 #define BOXTREE_FOR_EACH_HYBRID_VOLUME(X) \
-  X(Hybrid<ObbAll>)                      \
-  X(Hybrid<ObbMax>)                      \
-  X(Hybrid<ObbMin>)                      \
-  X(Hybrid<PieMax>)                      \
-  X(Hybrid<PieMin>)                      \
-  X(Hybrid<PieMaxGeneral>)               \
+  X(Hybrid<ObbAll>)                       \
+  X(Hybrid<ObbMax>)                       \
+  X(Hybrid<ObbMin>)                       \
+  X(Hybrid<PieMax>)                       \
+  X(Hybrid<PieMin>)                       \
+  X(Hybrid<PieMaxGeneral>)                \
   X(Hybrid<PieMinGeneral>)
 
 // Every kind but Aabb (handy where a list needs a first element written out).

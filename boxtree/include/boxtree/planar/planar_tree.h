@@ -29,7 +29,7 @@ namespace boxtree::planar {
 using PlanarNode = std::uint32_t;
 
 class PlanarTree {
-public:
+ public:
   // Bit 31 set: a leaf, the low bits are its rectangle id. Clear: the first child's index (the
   // second is first + 1). The root is node 0; children follow their parent (depth-first).
   static constexpr std::uint32_t kLeafFlag = 0x80000000u;
@@ -41,7 +41,7 @@ public:
   bool empty() const { return links_.empty(); }
   std::size_t node_count() const { return links_.size(); }
   std::size_t cell_count() const { return cells_.size(); }
-  int height() const { return height_;  }  // edges on the longest root-to-leaf path
+  int height() const { return height_; }  // edges on the longest root-to-leaf path
 
   static constexpr PlanarNode root() { return 0; }
   bool is_leaf(PlanarNode node) const { return (links_[node] & kLeafFlag) != 0; }
@@ -52,10 +52,10 @@ public:
   const std::vector<Rect>& cells() const { return cells_; }
   const Rect& domain() const { return boxes_.front(); }
 
-private:
-  std::vector<Rect> cells_;            // the input partition, by id
-  std::vector<Rect> boxes_;            // one per node (hot)
-  std::vector<std::uint32_t> links_;   // one per node
+ private:
+  std::vector<Rect> cells_;           // the input partition, by id
+  std::vector<Rect> boxes_;           // one per node (hot)
+  std::vector<std::uint32_t> links_;  // one per node
   int height_ = 0;
 };
 
@@ -69,12 +69,12 @@ struct PlanarBuildSettings {
 };
 
 struct PlanarRoundStats {
-  std::size_t cells = 0;              // m: size of the partition entering the round
+  std::size_t cells = 0;                // m: size of the partition entering the round
   std::size_t low_degree_segments = 0;  // of the chosen colour, degree <= max_segment_degree
-  std::size_t offers = 0;             // segments that offered a valid pair
-  std::size_t pairs = 0;              // pairs merged (the paper guarantees >= (m + 3) / 12)
-  std::size_t shortened = 0;          // cells shortened after the merge
-  bool vertical = true;               // colour: pairs across vertical segments
+  std::size_t offers = 0;               // segments that offered a valid pair
+  std::size_t pairs = 0;                // pairs merged (the paper guarantees >= (m + 3) / 12)
+  std::size_t shortened = 0;            // cells shortened after the merge
+  bool vertical = true;                 // colour: pairs across vertical segments
 };
 
 struct PlanarBuildStats {

@@ -29,7 +29,10 @@ struct Aabb {
   bool is_empty() const { return (min.array() > max.array()).any(); }
   Vec3 center() const { return (min + max) * Real(0.5); }
   Vec3 extent() const { return max - min; }
-  void expand(const Vec3& p) { min = min.cwiseMin(p); max = max.cwiseMax(p); }
+  void expand(const Vec3& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
 };
 
 inline Real surface_area(const Aabb& box) {

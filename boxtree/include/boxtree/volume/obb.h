@@ -56,7 +56,9 @@ struct OrientedBox {
                                            : kAxis == PrincipalAxis::max ? "obb-max"
                                                                          : "obb-min";
   static OrientedBox from_triangle(const Vec3& a, const Vec3& b, const Vec3& c) { return {obb_from_triangle(a, b, c)}; }
-  static OrientedBox enclosing(const OrientedBox& x, const OrientedBox& y) { return {obb_enclosing(x.box, y.box, kAxis)}; }
+  static OrientedBox enclosing(const OrientedBox& x, const OrientedBox& y) {
+    return {obb_enclosing(x.box, y.box, kAxis)};
+  }
   // The parent rule applied to the facet vertices below a node (BuildSettings::parent_fit).
   static std::optional<OrientedBox> fitted(const Vec3* points, std::size_t count) {
     return OrientedBox{obb_enclosing_points(points, count, kAxis)};
@@ -68,18 +70,49 @@ using ObbMax = OrientedBox<PrincipalAxis::max>;
 using ObbMin = OrientedBox<PrincipalAxis::min>;
 
 // The volume operations on OrientedBox<K> are those of its Obb.
-template <PrincipalAxis K> Real surface_area(const OrientedBox<K>& v) { return surface_area(v.box); }
-template <PrincipalAxis K> Real volume(const OrientedBox<K>& v) { return volume(v.box); }
-template <PrincipalAxis K> Real mean_width(const OrientedBox<K>& v) { return mean_width(v.box); }
-template <PrincipalAxis K> Vec3 center(const OrientedBox<K>& v) { return v.box.center; }
-template <PrincipalAxis K> Aabb bounding_aabb(const OrientedBox<K>& v) { return bounding_aabb(v.box); }
-template <PrincipalAxis K> ConvexPolytope polytope_of(const OrientedBox<K>& v) { return polytope_of(v.box); }
-template <PrincipalAxis K> bool contains(const OrientedBox<K>& v, const Vec3& p, Real tol = 0) { return contains(v.box, p, tol); }
-template <PrincipalAxis K> bool contains(const OrientedBox<K>& o, const OrientedBox<K>& i, Real tol = 0) { return contains(o.box, i.box, tol); }
-template <PrincipalAxis K, class Shape> bool overlaps(const OrientedBox<K>& v, const Shape& s) { return overlaps(v.box, s); }
-template <PrincipalAxis K> bool overlaps(const OrientedBox<K>& a, const OrientedBox<K>& b, const RigidTransform& t) { return overlaps(a.box, b.box, t); }
 template <PrincipalAxis K>
-bool intersect_ray(const OrientedBox<K>& v, const RayPrecomputed& ray, Real t_min, Real t_max, Real* t_enter = nullptr) {
+Real surface_area(const OrientedBox<K>& v) {
+  return surface_area(v.box);
+}
+template <PrincipalAxis K>
+Real volume(const OrientedBox<K>& v) {
+  return volume(v.box);
+}
+template <PrincipalAxis K>
+Real mean_width(const OrientedBox<K>& v) {
+  return mean_width(v.box);
+}
+template <PrincipalAxis K>
+Vec3 center(const OrientedBox<K>& v) {
+  return v.box.center;
+}
+template <PrincipalAxis K>
+Aabb bounding_aabb(const OrientedBox<K>& v) {
+  return bounding_aabb(v.box);
+}
+template <PrincipalAxis K>
+ConvexPolytope polytope_of(const OrientedBox<K>& v) {
+  return polytope_of(v.box);
+}
+template <PrincipalAxis K>
+bool contains(const OrientedBox<K>& v, const Vec3& p, Real tol = 0) {
+  return contains(v.box, p, tol);
+}
+template <PrincipalAxis K>
+bool contains(const OrientedBox<K>& o, const OrientedBox<K>& i, Real tol = 0) {
+  return contains(o.box, i.box, tol);
+}
+template <PrincipalAxis K, class Shape>
+bool overlaps(const OrientedBox<K>& v, const Shape& s) {
+  return overlaps(v.box, s);
+}
+template <PrincipalAxis K>
+bool overlaps(const OrientedBox<K>& a, const OrientedBox<K>& b, const RigidTransform& t) {
+  return overlaps(a.box, b.box, t);
+}
+template <PrincipalAxis K>
+bool intersect_ray(const OrientedBox<K>& v, const RayPrecomputed& ray, Real t_min, Real t_max,
+                   Real* t_enter = nullptr) {
   return intersect_ray(v.box, ray, t_min, t_max, t_enter);
 }
 

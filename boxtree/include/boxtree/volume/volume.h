@@ -21,16 +21,15 @@ template <class V, class = void>
 struct is_volume : std::false_type {};
 
 template <class V>
-struct is_volume<
-    V, std::void_t<decltype(V::from_triangle(Vec3(), Vec3(), Vec3())), decltype(V::enclosing(V(), V())),
-                   decltype(surface_area(V())), decltype(volume(V())), decltype(mean_width(V())),
-                   decltype(center(V())), decltype(bounding_aabb(V())), decltype(contains(V(), Vec3(), Real())),
-                   decltype(contains(V(), V(), Real())), decltype(overlaps(V(), Aabb())),
-                   decltype(overlaps(V(), Obb())), decltype(overlaps(V(), Sphere())),
-                   decltype(overlaps(V(), Capsule())), decltype(overlaps(V(), Plane())),
-                   decltype(overlaps(V(), V(), RigidTransform())),
-                   decltype(intersect_ray(V(), std::declval<const RayPrecomputed&>(), Real(), Real(),
-                                          static_cast<Real*>(nullptr)))>> : std::true_type {};
+struct is_volume<V, std::void_t<decltype(V::from_triangle(Vec3(), Vec3(), Vec3())), decltype(V::enclosing(V(), V())),
+                                decltype(surface_area(V())), decltype(volume(V())), decltype(mean_width(V())),
+                                decltype(center(V())), decltype(bounding_aabb(V())),
+                                decltype(contains(V(), Vec3(), Real())), decltype(contains(V(), V(), Real())),
+                                decltype(overlaps(V(), Aabb())), decltype(overlaps(V(), Obb())),
+                                decltype(overlaps(V(), Sphere())), decltype(overlaps(V(), Capsule())),
+                                decltype(overlaps(V(), Plane())), decltype(overlaps(V(), V(), RigidTransform())),
+                                decltype(intersect_ray(V(), std::declval<const RayPrecomputed&>(), Real(), Real(),
+                                                       static_cast<Real*>(nullptr)))>> : std::true_type {};
 
 template <class V>
 inline constexpr bool is_volume_v = is_volume<V>::value;

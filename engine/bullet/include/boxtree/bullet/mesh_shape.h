@@ -47,14 +47,14 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   explicit BoxtreeMeshShape(AnyTree tree);
 
   // ---- btConcaveShape / btCollisionShape ----
-  void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
-                           const btVector3& aabbMax) const override;
+  void processAllTriangles(btTriangleCallback * callback, const btVector3& aabbMin, const btVector3& aabbMax)
+      const override;
   void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override;
   void setLocalScaling(const btVector3& scaling) override;
   const btVector3& getLocalScaling() const override { return m_localScaling; }
   // A static or kinematic mesh needs none; for a dynamic mesh: the inertia of the mesh's box
   // (like btGImpactMeshShape's default), which is what Bullet programs expect for meshes.
-  void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
+  void calculateLocalInertia(btScalar mass, btVector3 & inertia) const override;
   const char* getName() const override { return "BoxtreeMesh"; }
 
   // ---- boxtree side ----
@@ -79,10 +79,10 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
 
   // Counters for benchmarks and tests (not synchronized: read them from one thread).
   struct Counters {
-    std::uint64_t queries = 0;                 // processAllTriangles box queries
-    std::uint64_t triangles = 0;               // triangles handed to Bullet callbacks by processAllTriangles
-    std::uint64_t ray_queries = 0;             // rays and sweeps answered by the ray path
-    std::uint64_t narrowphase_triangles = 0;   // triangles the boxtree algorithms ran a contact routine on
+    std::uint64_t queries = 0;                // processAllTriangles box queries
+    std::uint64_t triangles = 0;              // triangles handed to Bullet callbacks by processAllTriangles
+    std::uint64_t ray_queries = 0;            // rays and sweeps answered by the ray path
+    std::uint64_t narrowphase_triangles = 0;  // triangles the boxtree algorithms ran a contact routine on
   };
   const Counters& counters() const { return m_counters; }
   void resetCounters() const { m_counters = {}; }
@@ -92,7 +92,7 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   void init();
   // A query box of the scaled local frame in the tree's (unscaled) frame, clipped to the mesh.
   Aabb toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const;
-  void sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const;
+  void sweepCandidates(btTriangleConvexcastCallback & cast, FunctionRef<void(FacetId)> report) const;
 
   AnyTree m_tree;
   std::vector<FacetId> m_partFirstFacet;  // part p owns facets [m_partFirstFacet[p], m_partFirstFacet[p+1])
