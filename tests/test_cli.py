@@ -156,6 +156,10 @@ expect_error("bad index", ["info", write("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0
 expect_error("unknown subcommand", ["explode"], ["explode"])
 code, out, err = run("--help")
 check("--help exits 0", code == 0 and "info" in out and "collide" in out and "ray" in out, out + err)
+# --version: the project's version (boxtree/version.h, from CMake's project(VERSION)) on stdout.
+code, out, err = run("--version")
+check("--version exits 0 and prints 'boxtree X.Y.Z'", code == 0 and __import__("re").fullmatch(r"boxtree \d+\.\d+\.\d+\n", out) is not None,
+      repr(out) + err)
 
 # bad input (issue 9): every case exits non-zero with one line on stderr naming the file and the problem
 def write_bytes(name, data):

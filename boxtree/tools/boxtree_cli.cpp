@@ -21,6 +21,7 @@
 #include "boxtree/method.h"
 #include "boxtree/query.h"
 #include "boxtree/stats.h"
+#include "boxtree/version.h"
 
 namespace {
 
@@ -272,6 +273,7 @@ int run_generate(const std::string& kind, const std::string& out_path, int size,
 
 int main(int argc, char** argv) {
   CLI::App app{"boxtree: bottom-up bounding-volume hierarchies (BOXTREE, Barequet et al.) for triangle meshes"};
+  app.set_version_flag("--version", std::string("boxtree ") + BOXTREE_VERSION_STRING);
   app.require_subcommand(1);
   Options options;
   std::string method_help = "Hierarchy method:";
@@ -337,6 +339,9 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const CLI::CallForAllHelp&) {
     std::cout << app.help("", CLI::AppFormatMode::All);
+    return 0;
+  } catch (const CLI::CallForVersion& e) {
+    std::cout << e.what() << "\n";
     return 0;
   } catch (const CLI::ParseError& e) {
     std::cerr << "boxtree: error: " << e.what() << " (see boxtree --help)\n";

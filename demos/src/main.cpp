@@ -20,6 +20,7 @@
 
 #include "boxtree/error.h"
 #include "boxtree/method.h"
+#include "boxtree/version.h"
 #include "overlay.h"
 #include "render.h"
 #include "scene.h"
@@ -340,6 +341,10 @@ int run_simulation(const Options& o, const TerrainOptions& terrain_options) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{"boxtree-demo: bodies dropped onto a meshed terrain (Bullet or ODE), rendered off-screen to PNG"};
+  app.set_version_flag("--version", std::string("boxtree-demo ") + BOXTREE_VERSION_STRING + " (library " +
+                                        boxtree::library_version() + "; Bullet adapter " +
+                                        (have_bullet_adapter() ? "built" : "not built") + ", ODE adapter " +
+                                        (have_ode_adapter() ? "built" : "not built") + ")");
   app.add_option("--engine", o.engine, "Physics engine")
       ->check(CLI::IsMember({"bullet", "ode"}))
       ->capture_default_str();

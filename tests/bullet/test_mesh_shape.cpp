@@ -189,6 +189,45 @@ TEST(BulletMeshShape, RejectsBadMeshesWithClearErrors) {
   EXPECT_EQ(indices, (std::vector<int>{0, 1, 2}));  // the caller's arrays are untouched
 }
 
+// The btBvhTriangleMeshShape-style constructors (pointer + flags, pointer + method name) build the
+// same tree as the reference constructor, copy the arrays, and refuse a null interface.
+TEST(BulletMeshShape, PointerConstructorsAreTheOneLineSwap) {
+  BulletMesh bm(test_terrain());
+  const BoxtreeMeshShape reference(*bm.array, "aabb");
+  const btVector3 lo(10, 10, -5), hi(30, 25, 20);
+  const FacetSet expected = collect(reference, lo, hi);
+  ASSERT_FALSE(expected.empty());
+
+  const BoxtreeMeshShape flags(bm.array.get(), true);
+  const BoxtreeMeshShape flags_no_bvh(bm.array.get(), false, false);
+  const BoxtreeMeshShape with_bounds(bm.array.get(), true, btVector3(-1, -1, -1), btVector3(1, 1, 1));
+  const BoxtreeMeshShape named(bm.array.get(), "obb-min");
+  const BoxtreeMeshShape named_string(bm.array.get(), std::string("pie-min"));
+  const BoxtreeMeshShape defaulted(bm.array.get());
+  for (const BoxtreeMeshShape* shape : {&flags, &flags_no_bvh, &with_bounds, &defaulted})
+    EXPECT_EQ(method_name(shape->tree().method()), "aabb");
+  EXPECT_EQ(method_name(named.tree().method()), "obb-min");  // a literal is a method, not the bool flag
+  EXPECT_EQ(method_name(named_string.tree().method()), "pie-min");
+  // The bounds given to the third form do not clip the tree: it covers the whole mesh.
+  for (const BoxtreeMeshShape* shape : {&flags, &flags_no_bvh, &with_bounds, &defaulted})
+    EXPECT_EQ(collect(*shape, lo, hi), expected);
+  // The oriented methods report exactly the facets that overlap the box: a subset of the aabb set.
+  const FacetSet by_obb = collect(named, lo, hi);
+  EXPECT_TRUE(std::includes(expected.begin(), expected.end(), by_obb.begin(), by_obb.end()));
+  EXPECT_FALSE(by_obb.empty());
+
+  // Copied: changing the caller's vertices afterwards changes nothing in the shape.
+  const Vec3 first = flags.mesh().vertices[0];
+  bm.vertices[2] -= 1000;
+  EXPECT_EQ(flags.mesh().vertices[0], first);
+  EXPECT_EQ(collect(flags, lo - btVector3(20, 20, 2000), hi), collect(reference, lo - btVector3(20, 20, 2000), hi));
+  bm.vertices[2] += 1000;
+
+  EXPECT_THROW(BoxtreeMeshShape(static_cast<btStridingMeshInterface*>(nullptr), true), Error);
+  EXPECT_THROW(BoxtreeMeshShape(static_cast<btStridingMeshInterface*>(nullptr), "aabb"), Error);
+  EXPECT_THROW(BoxtreeMeshShape(bm.array.get(), "no-such-method"), Error);
+}
+
 // Records what btCollisionWorld's closest-ray callback does not: the triangle index.
 struct ClosestWithTriangle : btCollisionWorld::ClosestRayResultCallback {
   using ClosestRayResultCallback::ClosestRayResultCallback;

@@ -96,6 +96,29 @@ BoxtreeMeshShape::BoxtreeMeshShape(const btStridingMeshInterface& mesh, const st
   setLocalScaling(mesh.getScaling());
 }
 
+namespace {
+const btStridingMeshInterface& checked_interface(const btStridingMeshInterface* mesh) {
+  if (mesh == nullptr) throw Error("BoxtreeMeshShape: the mesh interface is null");
+  return *mesh;
+}
+}  // namespace
+
+BoxtreeMeshShape::BoxtreeMeshShape(btStridingMeshInterface* meshInterface, bool /*useQuantizedAabbCompression*/,
+                                   bool /*buildBvh*/)
+    : BoxtreeMeshShape(checked_interface(meshInterface), "aabb") {}
+
+BoxtreeMeshShape::BoxtreeMeshShape(btStridingMeshInterface* meshInterface, bool /*useQuantizedAabbCompression*/,
+                                   const btVector3& /*bvhAabbMin*/, const btVector3& /*bvhAabbMax*/, bool /*buildBvh*/)
+    : BoxtreeMeshShape(checked_interface(meshInterface), "aabb") {}
+
+BoxtreeMeshShape::BoxtreeMeshShape(btStridingMeshInterface* meshInterface, const std::string& method,
+                                   const BuildSettings& settings)
+    : BoxtreeMeshShape(checked_interface(meshInterface), method, settings) {}
+
+BoxtreeMeshShape::BoxtreeMeshShape(btStridingMeshInterface* meshInterface, const char* method,
+                                   const BuildSettings& settings)
+    : BoxtreeMeshShape(checked_interface(meshInterface), std::string(method != nullptr ? method : ""), settings) {}
+
 BoxtreeMeshShape::BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method,
                                    const BuildSettings& settings)
     : m_tree(AnyTree::build(std::move(mesh), checked_method(method), settings)) {

@@ -12,6 +12,8 @@
 // per overlapping pair).
 #include <btBulletCollisionCommon.h>
 
+#include "boxtree/bullet/config.h"
+
 namespace boxtree::bullet {
 
 struct AlgorithmSettings {

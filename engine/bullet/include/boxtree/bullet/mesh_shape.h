@@ -24,13 +24,15 @@
 
 #include <btBulletCollisionCommon.h>
 
+#include "boxtree/bullet/config.h"
+
 class btTriangleConvexcastCallback;
 
 #include "boxtree/any_tree.h"
 
 namespace boxtree::bullet {
 
-ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
+class alignas(16) BoxtreeMeshShape : public btConcaveShape {
  public:
   BT_DECLARE_ALIGNED_ALLOCATOR();
 
@@ -40,6 +42,19 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   // NaN/Inf or out-of-range indices; the interface is not modified or kept.
   explicit BoxtreeMeshShape(const btStridingMeshInterface& mesh, const std::string& method = "aabb",
                             const BuildSettings& settings = {});
+  // The same from a pointer, with btBvhTriangleMeshShape's constructor signatures, so that the swap
+  // is one line: `new btBvhTriangleMeshShape(meshInterface, true)` -> `new BoxtreeMeshShape(meshInterface,
+  // true)`. The arrays are copied as above (the interface may be freed afterwards) and the method is
+  // "aabb"; the two flags are accepted and ignored (the boxtree is always built and compact), as are
+  // the bounds of the third form (the tree's bounds are the mesh's). Throws boxtree::Error on a null
+  // pointer. A method name may follow the pointer as well: BoxtreeMeshShape(meshInterface, "obb-min").
+  BoxtreeMeshShape(btStridingMeshInterface* meshInterface, bool useQuantizedAabbCompression, bool buildBvh = true);
+  BoxtreeMeshShape(btStridingMeshInterface* meshInterface, bool useQuantizedAabbCompression,
+                   const btVector3& bvhAabbMin, const btVector3& bvhAabbMax, bool buildBvh = true);
+  explicit BoxtreeMeshShape(btStridingMeshInterface* meshInterface, const std::string& method = "aabb",
+                            const BuildSettings& settings = {});
+  // (A string literal would otherwise convert to the bool of the first form.)
+  BoxtreeMeshShape(btStridingMeshInterface* meshInterface, const char* method, const BuildSettings& settings = {});
   // From a boxtree mesh (one part, id 0; triangle index = facet id). The tree shares the mesh.
   explicit BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method = "aabb",
                             const BuildSettings& settings = {});
@@ -47,14 +62,14 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   explicit BoxtreeMeshShape(AnyTree tree);
 
   // ---- btConcaveShape / btCollisionShape ----
-  void processAllTriangles(btTriangleCallback * callback, const btVector3& aabbMin, const btVector3& aabbMax)
-      const override;
+  void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
+                           const btVector3& aabbMax) const override;
   void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override;
   void setLocalScaling(const btVector3& scaling) override;
   const btVector3& getLocalScaling() const override { return m_localScaling; }
   // A static or kinematic mesh needs none; for a dynamic mesh: the inertia of the mesh's box
   // (like btGImpactMeshShape's default), which is what Bullet programs expect for meshes.
-  void calculateLocalInertia(btScalar mass, btVector3 & inertia) const override;
+  void calculateLocalInertia(btScalar mass, btVector3& inertia) const override;
   const char* getName() const override { return "BoxtreeMesh"; }
 
   // ---- boxtree side ----
@@ -92,7 +107,7 @@ ATTRIBUTE_ALIGNED16(class) BoxtreeMeshShape : public btConcaveShape {
   void init();
   // A query box of the scaled local frame in the tree's (unscaled) frame, clipped to the mesh.
   Aabb toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const;
-  void sweepCandidates(btTriangleConvexcastCallback & cast, FunctionRef<void(FacetId)> report) const;
+  void sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const;
 
   AnyTree m_tree;
   std::vector<FacetId> m_partFirstFacet;  // part p owns facets [m_partFirstFacet[p], m_partFirstFacet[p+1])

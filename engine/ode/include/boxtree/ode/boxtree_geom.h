@@ -24,6 +24,7 @@
 #include <ode/ode.h>
 
 #include "boxtree/any_tree.h"
+#include "boxtree/ode/config.h"
 
 // ---- class registration ----
 
