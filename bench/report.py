@@ -110,6 +110,18 @@ def machine(seconds):
     return text + "\n"
 
 
+def rebase_links(markdown, prefix):
+    """Prefixes the relative targets of markdown links and images with `prefix`."""
+    if prefix in ("", "."):
+        return markdown
+    def fix(m):
+        target = m.group(2)
+        if re.match(r"^([a-z]+:|/|#)", target):
+            return m.group(0)
+        return m.group(1) + prefix.rstrip("/") + "/" + target + ")"
+    return re.sub(r"(\]\()([^)\s]+)\)", fix, markdown)
+
+
 def replace_block(document, name, content):
     pattern = re.compile(r"(<!-- generated: %s -->\n).*?(<!-- end generated: %s -->)" % (re.escape(name), re.escape(name)),
                          re.S)
@@ -144,11 +156,15 @@ def main():
             document = f.read()
         document = replace_block(document, "machine", machine(args.seconds))
         document = replace_block(document, "headline", headline(rows))
+        # A section's links are relative to its own .md (in the results folder): relative to the
+        # markdown file once spliced into it.
+        to_results = os.path.relpath(args.results, os.path.dirname(os.path.abspath(args.markdown)))
         for section in SECTIONS:
             path = os.path.join(args.results, section + ".md")
             if os.path.exists(path):
                 with open(path) as f:
-                    document = replace_block(document, section, f.read().rstrip("\n") + "\n")
+                    text = rebase_links(f.read(), to_results)
+                document = replace_block(document, section, text.rstrip("\n") + "\n")
         with open(args.markdown, "w") as f:
             f.write(document)
         print(f"report.py: updated {args.markdown}")
