@@ -6,6 +6,11 @@ generated blocks of bench/RESULTS.md (run by bench/run).
 Every program writes <results>/<section>.json (a list of rows) and <section>.md. A row is
   {"section", "case", "metric", "boxtree_method", "boxtree", "peer", "peer_value", "ratio"}
 with ratio = boxtree / peer_value (lower is better unless the metric name says otherwise).
+Agreement: where boxtree must answer exactly like its reference, a row's metric says so and its
+boxtree value counts the differences, which must be 0 (--check fails otherwise):
+  pairs_disagree     mesh vs mesh: (source, pose) pair lists differing from the reference
+  disagreeing_rays   rays: rays where this boxtree method differs from boxtree aabb
+  missed_queries     box queries: boxes where a facet whose triangle meets the box was not reported
 RESULTS.md keeps its hand-written text; only the parts between
   <!-- generated: NAME -->  and  <!-- end generated: NAME -->
 are replaced (NAME: machine, headline, or a section name).
@@ -54,6 +59,15 @@ def check_rows(rows):
     return problems
 
 
+AGREEMENT_METRICS = ("pairs_disagree", "disagreeing_rays", "missed_queries")
+
+
+def disagreements(rows):
+    """The rows whose metric counts differences from an exact reference and whose boxtree count is
+    not 0 (see the module's docstring)."""
+    return [r for r in rows if r["metric"].startswith(AGREEMENT_METRICS) and r.get("boxtree")]
+
+
 def geometric_mean(values):
     values = [v for v in values if v and v > 0]
     return math.exp(sum(math.log(v) for v in values) / len(values)) if values else None
@@ -61,29 +75,37 @@ def geometric_mean(values):
 
 def headline(rows):
     """Per section, metric and peer: the geometric mean of the ratios over the cases, for every
-    boxtree method, best method first."""
-    groups = defaultdict(lambda: defaultdict(list))
+    boxtree method that ran on all of the group's cases (like with like: a method measured on fewer
+    cases is not ranked; its mean is shown with its case count where it is aabb)."""
+    groups = defaultdict(lambda: defaultdict(dict))
     for row in rows:
         if row.get("ratio") is None or "disagree" in row["metric"]:
             continue
-        groups[(row["section"], row["metric"], row["peer"])][row["boxtree_method"]].append(row["ratio"])
-    lines = ["| section | metric | peer | best method: ratio (geometric mean over cases) | aabb | cases |",
+        groups[(row["section"], row["metric"], row["peer"])][row["boxtree_method"]][row["case"]] = row["ratio"]
+    lines = ["| section | metric | peer | best method over all cases: ratio (geometric mean) | aabb | cases |",
              "|---|---|---|---|---:|---:|"]
     for (section, metric, peer), by_method in sorted(groups.items(), key=lambda kv: (SECTIONS.index(kv[0][0])
                                                                                      if kv[0][0] in SECTIONS else 99,
                                                                                      kv[0][1], kv[0][2])):
-        means = {m: geometric_mean(v) for m, v in by_method.items()}
+        all_cases = set().union(*[set(c) for c in by_method.values()])
+        means = {m: geometric_mean(list(c.values())) for m, c in by_method.items() if set(c) == all_cases}
         means = {m: v for m, v in means.items() if v is not None}
-        if not means:
-            continue
         higher_is_better = "higher is better" in metric or "per_second" in metric
-        if metric in ("contacts_per_step", "pairs", "contacts"):  # agreement: the ratio nearest 1
-            best = min(means, key=lambda m: abs(math.log(means[m])))
+        if not means:
+            best = "none ran on every case"
+        elif metric in ("contacts_per_step", "pairs", "contacts"):  # agreement: the ratio nearest 1
+            m = min(means, key=lambda m: abs(math.log(means[m])))
+            best = f"{m}: {means[m]:.3g}"
         else:
-            best = (max if higher_is_better else min)(means, key=means.get)
-        aabb = f"{means['aabb']:.3g}" if "aabb" in means else ""
-        cases = max(len(v) for v in by_method.values())
-        lines.append(f"| {section} | {metric} | {peer} | {best}: {means[best]:.3g} | {aabb} | {cases} |")
+            m = (max if higher_is_better else min)(means, key=means.get)
+            best = f"{m}: {means[m]:.3g}"
+        aabb = ""
+        if "aabb" in by_method:
+            value = geometric_mean(list(by_method["aabb"].values()))
+            if value is not None:
+                partial = len(by_method["aabb"]) < len(all_cases)
+                aabb = f"{value:.3g}" + (f" ({len(by_method['aabb'])} cases)" if partial else "")
+        lines.append(f"| {section} | {metric} | {peer} | {best} | {aabb} | {len(all_cases)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -148,9 +170,10 @@ def main():
         f.write("\n")
     print(f"report.py: {len(rows)} rows -> {args.json}")
     print(headline(rows))
-    disagreements = [r for r in rows if "disagree" in r["metric"] and r.get("boxtree")]
-    for r in disagreements:
-        print(f"report.py: disagreement: {r['case']}: {r['metric']} = {r['boxtree']} ({r['boxtree_method']} vs {r['peer']})")
+    for r in disagreements(rows):
+        message = f"disagreement: {r['section']} / {r['case']}: {r['metric']} = {r['boxtree']} ({r['boxtree_method']} vs {r['peer']})"
+        print("report.py: " + message)
+        problems.append(message)
     if args.markdown:
         with open(args.markdown) as f:
             document = f.read()
