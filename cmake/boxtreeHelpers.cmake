@@ -26,3 +26,28 @@ function(boxtree_install_pkgconfig name description requires libs libs_private c
   configure_file(${PROJECT_SOURCE_DIR}/cmake/boxtree.pc.in ${PROJECT_BINARY_DIR}/pkgconfig/${name}.pc @ONLY)
   install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/${name}.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 endfunction()
+
+# An engine adapter's library (engine/<component>, target boxtree_<component>, exported as
+# boxtree::<component> in its own export set boxtree-<component>-targets): library properties,
+# the shared library's exports, and the install of the library, its headers (with the generated
+# boxtree/<component>/config.h) and boxtree-<component>.pc (which requires `requires`).
+function(boxtree_adapter_library component description requires)
+  set(target boxtree_${component})
+  set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON OUTPUT_NAME boxtree-${component}
+    EXPORT_NAME ${component} VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+  if(BUILD_SHARED_LIBS)
+    boxtree_export_only_boxtree(${target})
+  endif()
+  if(NOT BOXTREE_INSTALL)
+    return()
+  endif()
+  install(TARGETS ${target} EXPORT boxtree-${component}-targets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(DIRECTORY include/boxtree/${component} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/boxtree PATTERN "*.in" EXCLUDE)
+  install(FILES ${PROJECT_BINARY_DIR}/include/boxtree/${component}/config.h
+          DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/boxtree/${component})
+  boxtree_install_pkgconfig(boxtree-${component} "${description}" "boxtree = ${PROJECT_VERSION}, ${requires}"
+    "-lboxtree-${component}" "" "")
+endfunction()
