@@ -384,6 +384,56 @@ TEST(BulletAlgorithms, SlidingBoxDoesNotBumpOnInternalEdges) {
   EXPECT_GT(bullet.max_up, 5 * analytic.max_up);  // the scene does provoke bumps
 }
 
+// AlgorithmSettings::analyticContacts: a box 1 cm into one large facet gets its four bottom
+// corners from one collision pass with the core's box routine, one point from Bullet's GJK/EPA.
+TEST(BulletAlgorithms, AnalyticContactsGiveTheBoxFaceInOnePass) {
+  const TriangleMesh floor = make_terrain(1, 1, 1, 40, 0);  // two facets, 40 m square, z = 0
+  for (const bool analytic : {true, false}) {
+    SCOPED_TRACE(analytic ? "analytic" : "gjk");
+    AlgorithmSettings settings;
+    settings.analyticContacts = analytic;
+    World world(true, settings);
+    auto ground = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(floor));
+    const BoxtreeMeshShape* ground_shape = ground.get();
+    world.add(std::move(ground), 0, btVector3(0, 0, 0));
+    // Over the middle of the facet below the diagonal, 11 m from its other edges.
+    world.add(std::make_unique<btBoxShape>(btVector3(0.5f, 0.5f, 0.25f)), 1, btVector3(28, 12, 0.24f));
+    world.world.performDiscreteCollisionDetection();
+    EXPECT_EQ(world.contact_points(), analytic ? 4 : 1);
+    EXPECT_EQ(ground_shape->counters().narrowphase_triangles, 1u);
+  }
+}
+
+// AlgorithmSettings::meshMeshAlgorithm: without it, Bullet has nothing for a boxtree mesh against
+// a boxtree mesh (its empty algorithm): a rock sunk into the ground gets no contact, while a
+// sphere beside it still does (the convex algorithm is registered on its own).
+TEST(BulletAlgorithms, MeshMeshAlgorithmCanBeLeftOut) {
+  const auto floor = std::make_shared<TriangleMesh>(make_terrain(8, 8, 1, 16, 0));
+  const auto rock = std::make_shared<TriangleMesh>(make_uv_sphere(12, 8, 1));
+  for (const bool mesh_mesh : {true, false}) {
+    SCOPED_TRACE(mesh_mesh ? "with" : "without");
+    AlgorithmSettings settings;
+    settings.meshMeshAlgorithm = mesh_mesh;
+    World world(true, settings);
+    world.add(std::make_unique<BoxtreeMeshShape>(floor), 0, btVector3(0, 0, 0));
+    btRigidBody* rock_body = world.add(std::make_unique<BoxtreeMeshShape>(rock), 1, btVector3(4, 4, 0.9f));
+    btRigidBody* sphere_body = world.add(std::make_unique<btSphereShape>(0.5f), 1, btVector3(12, 12, 0.49f));
+    world.world.performDiscreteCollisionDetection();
+    int rock_points = 0, sphere_points = 0;
+    for (int i = 0; i < world.dispatcher.getNumManifolds(); ++i) {
+      const btPersistentManifold* m = world.dispatcher.getManifoldByIndexInternal(i);
+      if (m->getBody0() == rock_body || m->getBody1() == rock_body) rock_points += m->getNumContacts();
+      if (m->getBody0() == sphere_body || m->getBody1() == sphere_body) sphere_points += m->getNumContacts();
+    }
+    if (mesh_mesh) {
+      EXPECT_GT(rock_points, 0);
+    } else {
+      EXPECT_EQ(rock_points, 0);
+    }
+    EXPECT_GT(sphere_points, 0);
+  }
+}
+
 // BoxtreeMeshShape::activeEdges: on a flat grid only the border is active; on a coarse UV sphere
 // (convex, its quads between two rings planar) exactly the diagonals inside the quads are inactive.
 // Checked against a reference that finds each edge's neighbour and compares the two facets' planes.
@@ -424,13 +474,21 @@ TEST(BulletAlgorithms, ActiveEdgesOfAFlatGridAreOnlyItsBorder) {
   EXPECT_EQ(3 * int(m.facet_count()) - count_active(active), 2 * 4 * 8);
 }
 
+// boxtreeAlgorithmMaxSize is at least an algorithm object (Bullet's base plus the manifold
+// pointer), and registration refuses a pool one byte smaller and accepts one of that size.
 TEST(BulletAlgorithms, RegistrationChecksThePoolSize) {
-  btDefaultCollisionConstructionInfo info;
-  info.m_customCollisionAlgorithmMaxElementSize = 16;
-  btDefaultCollisionConfiguration config(info);
-  btCollisionDispatcher dispatcher(&config);
-  if (boxtreeAlgorithmMaxSize() > config.getCollisionAlgorithmPool()->getElementSize()) {
-    EXPECT_THROW(registerBoxtreeAlgorithms(&dispatcher), Error);
+  EXPECT_GT(boxtreeAlgorithmMaxSize(), int(sizeof(btActivatingCollisionAlgorithm)));
+  for (const int element_size : {boxtreeAlgorithmMaxSize() - 1, boxtreeAlgorithmMaxSize()}) {
+    btPoolAllocator pool(element_size, 64);
+    btDefaultCollisionConstructionInfo info;
+    info.m_collisionAlgorithmPool = &pool;  // the configuration uses it, and does not own it
+    btDefaultCollisionConfiguration config(info);
+    btCollisionDispatcher dispatcher(&config);
+    if (element_size < boxtreeAlgorithmMaxSize()) {
+      EXPECT_THROW(registerBoxtreeAlgorithms(&dispatcher), Error);
+    } else {
+      EXPECT_NO_THROW(registerBoxtreeAlgorithms(&dispatcher));
+    }
   }
   EXPECT_THROW(registerBoxtreeAlgorithms(nullptr), Error);
 }
