@@ -305,6 +305,49 @@ Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
   return scene;
 }
 
+std::vector<Vec3> bottom_points(const BodySpec& body, const Pose& pose) {
+  const auto world = [&](const Vec3& local) { return Vec3(pose.position + pose.orientation * local); };
+  const Vec3 down(0, 0, -1);
+  std::vector<Vec3> points;
+  switch (body.shape) {
+    case Shape::sphere:
+      points.push_back(pose.position + down * body.radius);
+      break;
+    case Shape::box: {
+      const Vec3& h = body.half_extents;
+      for (int k = 0; k < 8; ++k)
+        points.push_back(world(Vec3(k & 1 ? h.x() : -h.x(), k & 2 ? h.y() : -h.y(), k & 4 ? h.z() : -h.z())));
+      break;
+    }
+    case Shape::capsule:
+      for (const Real end : {-body.half_length, body.half_length})
+        points.push_back(world(Vec3(0, 0, end)) + down * body.radius);
+      break;
+    case Shape::cylinder:
+      for (int k = 0; k < 32; ++k) {
+        const Real angle = (k % 16) * kPi / 8;
+        points.push_back(world(Vec3(body.radius * std::cos(angle), body.radius * std::sin(angle),
+                                    k < 16 ? body.half_length : -body.half_length)));
+      }
+      break;
+    case Shape::convex:
+    case Shape::mesh:
+      for (const Vec3& v : body.mesh->vertices) points.push_back(world(v));
+      break;
+  }
+  return points;
+}
+
+std::optional<Real> depth_below_terrain(const TerrainProbe& probe, const BodySpec& body, const Pose& pose) {
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite()) return std::nullopt;
+  std::optional<Real> depth;
+  for (const Vec3& p : bottom_points(body, pose)) {
+    Real ground = 0;
+    if (probe.height_at(p.x(), p.y(), &ground)) depth = std::max(depth.value_or(-1e30), ground - p.z());
+  }
+  return depth;
+}
+
 TriangleMesh render_mesh_of(const BodySpec& body) {
   switch (body.shape) {
     case Shape::sphere:

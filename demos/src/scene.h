@@ -5,6 +5,7 @@
 // renderer draws it, and the same seed always gives the same scene.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,17 @@ class TerrainProbe {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The points of a body at `pose` that rest on the ground, in the world: the lowest point of a
+// sphere and of each capsule cap, the corners of a box, 16 points around each rim of a cylinder,
+// the vertices of a convex or mesh body. Their lowest is the body's lowest point; on a slope the
+// others reach the ground first. (Bullet's hulls carry a 4 cm margin outside their vertices.)
+std::vector<Vec3> bottom_points(const BodySpec& body, const Pose& pose);
+
+// How far a body is in the terrain: the largest (terrain height under a bottom point - the point's
+// height) over its bottom_points with terrain under them; negative when the body is clear of the
+// ground, nullopt when no point is over the terrain (or the pose is not finite).
+std::optional<Real> depth_below_terrain(const TerrainProbe& probe, const BodySpec& body, const Pose& pose);
 
 // The body's surface for drawing, in the body frame.
 TriangleMesh render_mesh_of(const BodySpec& body);

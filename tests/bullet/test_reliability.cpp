@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -117,12 +118,18 @@ struct OddScene {
   }
 };
 
+// The bodies' bottoms against the odd terrain under them: deepest measured 0.34 cm (single-precision
+// Bullet; 0.23 double); allowance 0.5 cm. Off the terrain's edge: 3 of 48 (2 double).
+constexpr Real kOddDepthAllowance = 0.005;
+constexpr int kOddOffAllowance = 3;
+
 TEST(BulletReliability, OddTerrainGivesNoNanAndNoFallThrough) {
   const TriangleMesh terrain = boxtree::test::make_odd_terrain(28, 3, 28, 3);
   const AnyTree reference = AnyTree::build(std::make_shared<TriangleMesh>(BulletMesh(terrain).as_boxtree()), Method{});
   OddScene scene(terrain);
   scene.run(300);
   int non_finite = 0, off = 0;
+  Real deepest = -1e30;
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const btTransform& t = scene.bodies[i]->getWorldTransform();
     const Vec3 p = to_vec3(t.getOrigin());
@@ -130,15 +137,17 @@ TEST(BulletReliability, OddTerrainGivesNoNanAndNoFallThrough) {
       ++non_finite;
       continue;
     }
-    const auto hit = reference.ray_closest_hit(Ray{Vec3(p.x(), p.y(), 1000), Vec3(0, 0, -1)});
-    if (!hit) {
+    const auto depth = depth_below(reference, *scene.bodies[i]);
+    if (!depth) {
       ++off;  // rolled off the terrain's edge (an open sheet), not through it
       continue;
     }
-    EXPECT_GT(p.z(), 1000 - hit->t) << "body " << i << " fell through";
+    deepest = std::max(deepest, *depth);
+    EXPECT_LT(*depth, kOddDepthAllowance) << "body " << i << " is in the ground";
   }
+  std::printf("odd terrain: deepest body %.4f m below the terrain, %d off it\n", deepest, off);
   EXPECT_EQ(non_finite, 0);
-  EXPECT_LE(off, int(scene.bodies.size()) / 8) << "most bodies stay on the terrain";
+  EXPECT_LE(off, kOddOffAllowance) << "most bodies stay on the terrain";
 }
 
 // A body whose centre was pressed just behind a flat terrain (as a deep pile does): a two-sided
@@ -174,7 +183,9 @@ TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
       World world(true);
       world.world.setGravity(btVector3(0, 0, 0));
       auto terrain = std::make_unique<BoxtreeMeshShape>(*bullet_mesh.array);
+      EXPECT_TRUE(terrain->isTwoSided());  // the default, like btBvhTriangleMeshShape
       terrain->setTwoSided(two_sided);
+      EXPECT_EQ(terrain->isTwoSided(), two_sided);
       world.add(std::move(terrain), 0, btVector3(-4, -4, 0));
       // Centre below the surface, the body's top above it (the capsule's axis wholly below).
       const btScalar depth = kind == 2 ? -0.25f : -0.15f;

@@ -128,13 +128,19 @@ def check_frames(demo, engine, midphase, out_dir):
         fail(f"the first and last frames differ in only {changed} bytes: did anything move?")
     if summary["bodies"] != 40 or len(summary["final_bodies"]) != 40:
         fail("expected 40 bodies in the summary")
+    # above_terrain: the body's bottom (its lowest point, and every corner or vertex) is no deeper
+    # in the terrain under it than the demo's allowance (demos/src/main.cpp).
     below = [b for b in summary["final_bodies"] if b["above_terrain"] is False]
     off = [b for b in summary["final_bodies"] if b["above_terrain"] is None]
     if below or off:
         fail(f"{len(below)} bodies ended below the terrain and {len(off)} off it: {below + off}")
+    if summary["bodies_above_terrain"] != 40:
+        fail(f"bodies_above_terrain is {summary['bodies_above_terrain']}, expected 40")
     if summary["contacts_per_step"] <= 0:
         fail("no contacts were reported")
-    print(f"ok: {engine}/{midphase}: {len(images)} frames, all {summary['bodies']} bodies above the terrain, "
+    deepest = max(summary["final_bodies"], key=lambda b: b["depth"])
+    print(f"ok: {engine}/{midphase}: {len(images)} frames, all {summary['bodies']} bodies above the terrain "
+          f"(deepest: a {deepest['shape']} {100 * deepest['depth']:.1f} cm in), "
           f"{summary['contacts_per_step']:.0f} contacts per step")
 
 

@@ -5,9 +5,11 @@
 // timing report (test_drop.cpp).
 #include <ode/ode.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -128,37 +130,6 @@ class DropWorld {
   dSpaceID space() const { return space_; }
   dWorldID world() const { return world_; }
 
-  // The lowest point of a body's shape (its support point along -z): what rests on the ground.
-  Real lowest_z(std::size_t i) const {
-    dGeomID g = geoms_[i];
-    const dReal* p = dBodyGetPosition(bodies_[i]);
-    const dReal* r = dBodyGetRotation(bodies_[i]);
-    // Row 2 of R: the body axes' z components.
-    const Vec3 zrow(r[8], r[9], r[10]);
-    switch (dGeomGetClass(g)) {
-      case dSphereClass:
-        return p[2] - dGeomSphereGetRadius(g);
-      case dBoxClass: {
-        dVector3 l;
-        dGeomBoxGetLengths(g, l);
-        return p[2] - 0.5 * (std::abs(zrow[0]) * l[0] + std::abs(zrow[1]) * l[1] + std::abs(zrow[2]) * l[2]);
-      }
-      case dCapsuleClass: {
-        dReal radius, length;
-        dGeomCapsuleGetParams(g, &radius, &length);
-        return p[2] - radius - 0.5 * length * std::abs(zrow[2]);
-      }
-      case dCylinderClass: {
-        dReal radius, length;
-        dGeomCylinderGetParams(g, &radius, &length);
-        const Real axis_z = std::abs(zrow[2]);
-        return p[2] - 0.5 * length * axis_z - radius * std::sqrt(std::max(Real(0), 1 - axis_z * axis_z));
-      }
-      default:
-        return p[2];
-    }
-  }
-
  private:
   static void near_callback(void* self_ptr, dGeomID a, dGeomID b) {
     auto* self = static_cast<DropWorld*>(self_ptr);
@@ -234,6 +205,85 @@ class DropWorld {
 inline Real terrain_height(const AnyTree& tree, Real x, Real y) {
   const auto hit = tree.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
   return hit ? 1000 - hit->t : -1e9;
+}
+
+// Terrain height under (x, y), nullopt off the terrain.
+inline std::optional<Real> terrain_height_at(const AnyTree& tree, Real x, Real y) {
+  const auto hit = tree.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
+  if (!hit) return std::nullopt;
+  return 1000 - hit->t;
+}
+
+// The points of a geom that rest on the ground, in the world: the lowest point of a sphere and of
+// each capsule cap, the corners of a box, 16 points around each rim of a cylinder, the vertices
+// of a boxtree geom or an ODE trimesh. Their lowest is the geom's lowest point, and on a slope
+// the others reach the ground first.
+inline std::vector<Vec3> bottom_points(dGeomID g) {
+  const dReal* p = dGeomGetPosition(g);
+  const dReal* r = dGeomGetRotation(g);  // 3 rows of 4
+  const Vec3 center(p[0], p[1], p[2]);
+  const auto world = [&](const Vec3& local) {
+    Vec3 w;
+    for (int row = 0; row < 3; ++row)
+      w[row] = r[4 * row] * local.x() + r[4 * row + 1] * local.y() + r[4 * row + 2] * local.z() + p[row];
+    return w;
+  };
+  const Vec3 down(0, 0, -1);
+  std::vector<Vec3> points;
+  switch (dGeomGetClass(g)) {
+    case dSphereClass:
+      points.push_back(center + down * dGeomSphereGetRadius(g));
+      break;
+    case dBoxClass: {
+      dVector3 l;
+      dGeomBoxGetLengths(g, l);
+      for (int k = 0; k < 8; ++k)
+        points.push_back(world(0.5 * Vec3(k & 1 ? l[0] : -l[0], k & 2 ? l[1] : -l[1], k & 4 ? l[2] : -l[2])));
+      break;
+    }
+    case dCapsuleClass: {
+      dReal radius, length;
+      dGeomCapsuleGetParams(g, &radius, &length);
+      for (Real end : {-0.5, 0.5}) points.push_back(world(Vec3(0, 0, end * length)) + down * radius);
+      break;
+    }
+    case dCylinderClass: {
+      dReal radius, length;
+      dGeomCylinderGetParams(g, &radius, &length);
+      for (int k = 0; k < 32; ++k) {
+        const Real angle = (k % 16) * M_PI / 8;
+        points.push_back(
+            world(Vec3(radius * std::cos(angle), radius * std::sin(angle), (k < 16 ? 0.5 : -0.5) * length)));
+      }
+      break;
+    }
+    case dTriMeshClass:
+      for (int i = 0; i < dGeomTriMeshGetTriangleCount(g); ++i) {
+        dVector3 v[3];
+        dGeomTriMeshGetTriangle(g, i, &v[0], &v[1], &v[2]);
+        for (const dVector3& c : v) points.emplace_back(c[0], c[1], c[2]);
+      }
+      break;
+    default:
+      if (const AnyTree* tree = boxtree::ode::geom_tree(g)) {
+        for (const Vec3& v : tree->mesh().vertices) points.push_back(world(v));
+      } else {
+        points.push_back(center);
+      }
+  }
+  return points;
+}
+
+// How deep a geom is in the ground: the largest (terrain height under a bottom point - the
+// point's height) over its bottom_points with terrain under them; negative when it is clear of
+// the ground, nullopt when no point is over the terrain.
+inline std::optional<Real> depth_below(const AnyTree& terrain, dGeomID g) {
+  std::optional<Real> depth;
+  for (const Vec3& p : bottom_points(g)) {
+    if (const auto ground = terrain_height_at(terrain, p.x(), p.y()))
+      depth = std::max(depth.value_or(-1e30), *ground - p.z());
+  }
+  return depth;
 }
 
 // Four of each kind on a grid over the terrain's interior, 1 unit above the highest ground

@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "boxtree/error.h"
 #include "boxtree/generate.h"
+#include "boxtree/method.h"
 #include "boxtree/ode/boxtree_geom.h"
 #include "ode_scene.h"
 
@@ -587,6 +589,238 @@ TEST(OdeGeom, MeshVersusMeshBothOrders) {
     dGeomSetPosition(c, 0.2, 0.1, 0.55);
     EXPECT_EQ(collide(ground, c, out, 16), 0);
   }
+}
+
+// Facets are one-sided by default: a sphere whose centre is 0.1 behind a facet is pushed out
+// through its front (up, depth 0.3 + 0.1); two_sided pushes it out the near way (down, 0.3 - 0.1).
+TEST(OdeGeom, OneSidedByDefaultTwoSidedPushesOutTheNearSide) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(8, 4), "aabb");
+  EXPECT_FALSE(boxtree::ode::geom_settings(mesh).two_sided);
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, -0.1);  // under the incentre of facet 72 (see above)
+  std::vector<dContactGeom> out;
+  ASSERT_EQ(collide(mesh, sphere, out), 1);
+  EXPECT_EQ(out[0].side1, 72);
+  EXPECT_NEAR(out[0].depth, 0.4, 1e-12);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, -1)).norm(), 1e-12);  // g2 -> g1: the sphere is pushed up
+  boxtree::ode::GeomSettings settings;
+  settings.two_sided = true;
+  boxtree::ode::set_geom_settings(mesh, settings);
+  EXPECT_TRUE(boxtree::ode::geom_settings(mesh).two_sided);
+  ASSERT_EQ(collide(mesh, sphere, out), 1);
+  EXPECT_NEAR(out[0].depth, 0.2, 1e-12);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, 1)).norm(), 1e-12);  // pushed down, out of the back
+  // In front, both settings agree.
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.25);
+  ASSERT_EQ(collide(mesh, sphere, out), 1);
+  EXPECT_NEAR(out[0].depth, 0.05, 1e-12);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, -1)).norm(), 1e-12);
+}
+
+// margin: a sphere 2 cm above a facet touches nothing; with a 5 cm margin it gets a contact of
+// depth 0, and the geom's AABB (so the space's pairing) grows by the margin.
+TEST(OdeGeom, MarginMakesSpeculativeContacts) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(8, 4), "aabb");
+  EXPECT_EQ(boxtree::ode::geom_settings(mesh).margin, 0);
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.32);
+  std::vector<dContactGeom> out;
+  EXPECT_EQ(collide(mesh, sphere, out), 0);
+  dReal before[6], after[6];
+  dGeomGetAABB(mesh, before);
+  boxtree::ode::GeomSettings settings;
+  settings.margin = 0.05;
+  boxtree::ode::set_geom_settings(mesh, settings);
+  EXPECT_EQ(boxtree::ode::geom_settings(mesh).margin, 0.05);
+  ASSERT_EQ(collide(mesh, sphere, out), 1);
+  EXPECT_EQ(out[0].depth, 0);
+  EXPECT_LT((normal_of(out[0]) - Vec3(0, 0, -1)).norm(), 1e-12);
+  EXPECT_EQ(out[0].side1, 72);
+  dGeomGetAABB(mesh, after);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(after[2 * i], before[2 * i] - 0.05, 1e-12);
+    EXPECT_NEAR(after[2 * i + 1], before[2 * i + 1] + 0.05, 1e-12);
+  }
+  // Beyond the margin: nothing.
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.36);
+  EXPECT_EQ(collide(mesh, sphere, out), 0);
+  settings.margin = -0.01;
+  EXPECT_THROW(boxtree::ode::set_geom_settings(mesh, settings), Error);
+  settings.margin = 0;
+  settings.merge_fraction = -1;
+  EXPECT_THROW(boxtree::ode::set_geom_settings(mesh, settings), Error);
+  EXPECT_EQ(boxtree::ode::geom_settings(mesh).margin, 0.05);  // a refused setting changes nothing
+  // Only boxtree geoms have settings and counters.
+  EXPECT_THROW(boxtree::ode::set_geom_settings(sphere, {}), Error);
+  EXPECT_THROW(boxtree::ode::geom_settings(sphere), Error);
+  EXPECT_THROW(boxtree::ode::geom_counters(sphere), Error);
+  EXPECT_THROW(boxtree::ode::reset_geom_counters(sphere), Error);
+}
+
+// merge_fraction: a box face resting on a fine grid (25 cm cells) gives a patch point at every
+// grid vertex and box corner under it; merged at half the box's size, far fewer remain.
+TEST(OdeGeom, MergeFractionMergesNearbyContacts) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(16, 2), "aabb");
+  dGeomID box = dCreateBox(space.id, 1.0, 0.8, 0.6);
+  dGeomSetPosition(box, 0.13, -0.21, 0.25);
+  std::vector<int> counts;
+  for (const Real fraction : {0.0, 0.01, 0.5}) {
+    boxtree::ode::GeomSettings settings;
+    settings.merge_fraction = fraction;
+    boxtree::ode::set_geom_settings(mesh, settings);
+    std::vector<dContactGeom> out;
+    counts.push_back(collide(mesh, box, out, 64));
+    for (const dContactGeom& g : out) EXPECT_NEAR(g.depth, 0.05, 1e-9);
+  }
+  std::printf("[ merge    ] box on a 25 cm grid, 64 asked: %d contacts unmerged, %d at 0.01, %d at 0.5\n", counts[0],
+              counts[1], counts[2]);
+  // Measured: 49, 43 and 8.
+  EXPECT_GE(counts[0], 40);
+  EXPECT_LT(counts[1], counts[0]);
+  EXPECT_LE(counts[2], 8);
+}
+
+// internal_edges: a sphere over a flat grid near a vertex touches the neighbouring facets at their
+// edges; with internal_edges (the default) those contacts get the face normal, without they keep
+// the tilted edge normals (up to ~29 degrees here).
+TEST(OdeGeom, InternalEdgesGiveTheFaceNormal) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
+  EXPECT_TRUE(boxtree::ode::geom_settings(mesh).internal_edges);
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  dGeomSetPosition(sphere, 0.1, 0.05, 0.2);
+  for (const bool internal_edges : {true, false}) {
+    SCOPED_TRACE(internal_edges);
+    boxtree::ode::GeomSettings settings;
+    settings.internal_edges = internal_edges;
+    boxtree::ode::set_geom_settings(mesh, settings);
+    std::vector<dContactGeom> out;
+    ASSERT_GE(collide(mesh, sphere, out), 1);
+    Real most_tilted = 1;
+    for (const dContactGeom& g : out) most_tilted = std::min(most_tilted, -normal_of(g).z());
+    if (internal_edges) {
+      EXPECT_GT(most_tilted, 1 - 1e-12);
+    } else {
+      EXPECT_LT(most_tilted, std::cos(20 * M_PI / 180));
+    }
+    EXPECT_NEAR(deepest(out).depth, 0.1, 1e-12);
+  }
+}
+
+// geom_counters: one call per dCollide that reaches the tree, the facets the tree query returned,
+// the contacts written; reset_geom_counters zeroes them.
+TEST(OdeGeom, GeomCountersCountAndReset) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(8, 4), "aabb");
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  auto counters = boxtree::ode::geom_counters(mesh);
+  EXPECT_EQ(counters.calls + counters.candidate_facets + counters.contacts, 0u);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.25);  // meets facet 72 only
+  std::vector<dContactGeom> out;
+  ASSERT_EQ(collide(mesh, sphere, out), 1);
+  ASSERT_EQ(collide(sphere, mesh, out), 1);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 2);  // clear: the tree is asked, nothing found
+  EXPECT_EQ(collide(mesh, sphere, out), 0);
+  counters = boxtree::ode::geom_counters(mesh);
+  EXPECT_EQ(counters.calls, 3u);
+  EXPECT_EQ(counters.candidate_facets, 2u);
+  EXPECT_EQ(counters.contacts, 2u);
+  boxtree::ode::reset_geom_counters(mesh);
+  counters = boxtree::ode::geom_counters(mesh);
+  EXPECT_EQ(counters.calls, 0u);
+  EXPECT_EQ(counters.candidate_facets, 0u);
+  EXPECT_EQ(counters.contacts, 0u);
+}
+
+// dCreateBoxtreeMesh(space, tree): geoms share the built tree (no rebuild) and each collides in
+// its own place.
+TEST(OdeGeom, GeomsShareOneBuiltTree) {
+  Space space;
+  const auto grid = flat_grid(8, 4);
+  const AnyTree tree = AnyTree::build(grid, parse_method("obb-min"));
+  dGeomID a = dCreateBoxtreeMesh(space.id, tree);
+  dGeomID b = dCreateBoxtreeMesh(space.id, tree);
+  dGeomSetPosition(b, 10, 0, 0);
+  for (dGeomID g : {a, b}) {
+    ASSERT_TRUE(boxtree::ode::is_boxtree_geom(g));
+    EXPECT_EQ(boxtree::ode::geom_tree(g)->get<ObbMin>(), tree.get<ObbMin>());
+    EXPECT_EQ(&boxtree::ode::geom_tree(g)->mesh(), grid.get());
+    EXPECT_EQ(dSpaceQuery(space.id, g), 1);
+  }
+  dGeomID sphere = dCreateSphere(space.id, 0.3);
+  std::vector<dContactGeom> out;
+  dGeomSetPosition(sphere, 10.7071, 0.2929, 0.25);
+  EXPECT_EQ(collide(a, sphere, out), 0);
+  ASSERT_EQ(collide(b, sphere, out), 1);
+  EXPECT_EQ(out[0].side1, 72);
+  EXPECT_NEAR(out[0].depth, 0.05, 1e-12);
+  dGeomSetPosition(sphere, 0.7071, 0.2929, 0.25);
+  EXPECT_EQ(collide(a, sphere, out), 1);
+  EXPECT_EQ(collide(b, sphere, out), 0);
+}
+
+// The tree the adapter caches for an ODE trimesh is checked against three of its triangles only
+// (the first, middle and last): after the data is changed elsewhere, the cached tree is stale
+// until forget_trimesh_data drops it.
+TEST(OdeGeom, ForgetTrimeshDataDropsTheCachedTree) {
+  Space space;
+  // The grid with its own three corners per facet, so that facets move one by one.
+  const auto shared = flat_grid(8, 4);
+  TriangleMesh unshared;
+  for (FacetId f = 0; f < shared->facet_count(); ++f) {
+    const auto base = VertexId(unshared.vertices.size());
+    for (int k = 0; k < 3; ++k) unshared.vertices.push_back(shared->corner(f, k));
+    unshared.triangles.push_back({base, base + 1, base + 2});
+  }
+  OdeTrimesh ground(space.id, unshared);
+  dGeomID cube = dCreateBoxtreeMesh(space.id, box_mesh(Vec3(0.5, 0.5, 0.5)), "aabb");
+  dGeomSetPosition(cube, 1.3, -2.4, 0.45);  // 5 cm into cells far from facets 0, 64 and 127
+  std::vector<dContactGeom> out;
+  ASSERT_GE(collide(cube, ground.geom, out, 16), 1);
+  // Every other facet 1 m down, in the arrays ODE reads.
+  const int count = int(unshared.facet_count());
+  for (int f = 0; f < count; ++f) {
+    if (f == 0 || f == count / 2 || f == count - 1) continue;
+    for (int k = 0; k < 3; ++k) ground.vertices[std::size_t(9 * f + 3 * k + 2)] -= 1;
+  }
+  dGeomTriMeshDataUpdate(ground.data);
+  EXPECT_GE(collide(cube, ground.geom, out, 16), 1);  // the stale tree still has them at z = 0
+  boxtree::ode::forget_trimesh_data(ground.data);
+  EXPECT_EQ(collide(cube, ground.geom, out, 16), 0);
+  dGeomSetPosition(cube, 1.3, -2.4, -0.55);
+  EXPECT_GE(collide(cube, ground.geom, out, 16), 1);
+}
+
+// set_convex and set_convex_points on a geom made with dCreateConvex: nothing before, contacts
+// after (a patch with the faces, GJK points without).
+TEST(OdeGeom, ConvexRegistrationOfAPlainConvexGeom) {
+  Space space;
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
+  static const dReal planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+  static const dReal points[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
+                                 0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+  static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
+                                      4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  dGeomID with_faces = dCreateConvex(space.id, planes, 6, points, 8, polygons);
+  dGeomID points_only = dCreateConvex(space.id, planes, 6, points, 8, polygons);
+  std::vector<dContactGeom> out;
+  for (dGeomID c : {with_faces, points_only}) {
+    dGeomSetPosition(c, 0.1, 0.2, 0.45);
+    EXPECT_EQ(collide(mesh, c, out, 8), 0);  // not registered
+  }
+  boxtree::ode::set_convex(with_faces, planes, 6, points, 8, polygons);
+  ASSERT_GE(collide(mesh, with_faces, out, 8), 4);
+  for (const dContactGeom& g : out) EXPECT_NEAR(g.depth, 0.05, 1e-9);
+  boxtree::ode::set_convex_points(points_only, points, 8);
+  ASSERT_GE(collide(mesh, points_only, out, 8), 1);
+  EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
+  EXPECT_THROW(boxtree::ode::set_convex_points(mesh, points, 8), Error);  // not a dConvex
+  for (dGeomID c : {with_faces, points_only}) boxtree::ode::forget_convex(c);
+  EXPECT_EQ(collide(mesh, with_faces, out, 8), 0);
+  EXPECT_EQ(collide(mesh, points_only, out, 8), 0);
 }
 
 // ODE's registration does not survive dCloseODE: close, re-init, register again, collide.

@@ -5,7 +5,9 @@
 // positions and rotations.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -159,12 +161,16 @@ class OddWorld {
   std::vector<dBodyID> bodies_;
 };
 
+// The bodies' bottoms against the odd terrain under them: deepest measured 0.23 cm; allowance 0.5 cm.
+constexpr Real kOddDepthAllowance = 0.005;
+
 TEST(OdeReliability, OddTerrainGivesNoNanAndNoFallThrough) {
   const auto terrain = std::make_shared<const TriangleMesh>(boxtree::test::make_odd_terrain(28, 3, 28, 3));
   const AnyTree reference = AnyTree::build(terrain, Method{});
   OddWorld world(terrain);
   world.run(300);
   int non_finite = 0, off = 0;
+  Real deepest = -1e30;
   for (std::size_t k = 0; k < world.bodies().size(); ++k) {
     const dReal* p = dBodyGetPosition(world.bodies()[k]);
     const dReal* q = dBodyGetQuaternion(world.bodies()[k]);
@@ -172,15 +178,17 @@ TEST(OdeReliability, OddTerrainGivesNoNanAndNoFallThrough) {
       ++non_finite;
       continue;
     }
-    const Real ground = terrain_height(reference, p[0], p[1]);
-    if (ground < -1e8) {
+    const auto depth = depth_below(reference, dBodyGetFirstGeom(world.bodies()[k]));
+    if (!depth) {
       ++off;  // rolled off the terrain's edge (an open sheet), not through it
       continue;
     }
-    EXPECT_GT(p[2], ground) << "body " << k << " fell through";
+    deepest = std::max(deepest, *depth);
+    EXPECT_LT(*depth, kOddDepthAllowance) << "body " << k << " is in the ground";
   }
+  std::printf("[ odd      ] deepest body %.4f m below the terrain, %d off it\n", deepest, off);
   EXPECT_EQ(non_finite, 0);
-  EXPECT_LE(off, int(world.bodies().size()) / 8) << "most bodies stay on the terrain";
+  EXPECT_EQ(off, 0) << "measured: all 32 stay on the terrain";
 }
 
 // dWorldQuickStep shuffles its constraints with ODE's global random generator, so each run
