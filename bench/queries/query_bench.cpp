@@ -200,9 +200,9 @@ int main(int argc, char** argv) {
         rows.push_back(boxtree::bench::compare("box_queries", case_name, kCandidateMetric, method,
                                                double(run->candidates) / n_boxes, kBulletPeer,
                                                double(bullet_run.candidates) / n_boxes));
-        Row missed = boxtree::bench::compare("box_queries", case_name, kMissedMetric, method,
-                                             double(run->missed_queries), kBulletPeer,
-                                             double(bullet_run.missed_queries));
+        Row missed =
+            boxtree::bench::compare("box_queries", case_name, kMissedMetric, method, double(run->missed_queries),
+                                    kBulletPeer, double(bullet_run.missed_queries));
         missed.ratio.reset();  // a count that must be 0 (bench/report.py --check), not a ratio
         rows.push_back(missed);
       }
