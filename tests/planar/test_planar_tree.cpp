@@ -3,7 +3,9 @@
 // brute force on every generator, and the stabbing number against brute force.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -88,8 +90,38 @@ TEST(PlanarTree, PairingInvariantsOnManySmallPartitions) {
   }
 }
 
-// Point location against a scan of every cell, at random points, at every cell corner and edge
-// midpoint (points shared by several cells: the half-open rule picks one), and outside.
+// The reference for point location, written apart from the library's predicates: the cells
+// that hold p, each cell taken as [min, max) on both axes after a point on the domain's max side
+// (closed there, by locate_point's contract) is moved one ulp back inside. In a partition at
+// most one cell holds any point.
+std::vector<RectId> cells_holding(const std::vector<Rect>& cells, Vec2 p) {
+  const Real inf = std::numeric_limits<Real>::infinity();
+  Real max_x = -inf, max_y = -inf;
+  for (const Rect& c : cells) {
+    max_x = std::max(max_x, c.max.x());
+    max_y = std::max(max_y, c.max.y());
+  }
+  if (p.x() == max_x) p.x() = std::nextafter(p.x(), -inf);
+  if (p.y() == max_y) p.y() = std::nextafter(p.y(), -inf);
+  std::vector<RectId> holding;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const Rect& c = cells[i];
+    if (c.min.x() <= p.x() && p.x() < c.max.x() && c.min.y() <= p.y() && p.y() < c.max.y())
+      holding.push_back(RectId(i));
+  }
+  return holding;
+}
+
+std::optional<RectId> reference_locate(const std::vector<Rect>& cells, const Vec2& p) {
+  const std::vector<RectId> holding = cells_holding(cells, p);
+  EXPECT_LE(holding.size(), 1u) << "cells of a partition overlap at (" << p.x() << ", " << p.y() << ")";
+  if (holding.empty()) return std::nullopt;
+  return holding.front();
+}
+
+// Point location against the reference, at random points, at every cell corner and edge
+// midpoint (points shared by several cells: the half-open rule picks one), and outside; the
+// library's own scan (locate_point_brute_force) and its cell predicate against it too.
 void check_locate(const std::vector<Rect>& cells, const std::string& what) {
   SCOPED_TRACE(what);
   const PlanarTree tree = build_planar_tree(cells);
@@ -110,14 +142,23 @@ void check_locate(const std::vector<Rect>& cells, const std::string& what) {
     points.emplace_back(c.min.x(), c.center().y());
     points.push_back(c.center());
   }
+  const std::size_t cell_stride = std::max<std::size_t>(1, cells.size() / 64);
   for (const Vec2& p : points) {
-    const std::optional<RectId> expected = locate_point_brute_force(cells, p);
+    const std::optional<RectId> expected = reference_locate(cells, p);
     PlanarQueryStats stats;
     const std::optional<RectId> got = locate_point(tree, p, &stats);
     ASSERT_EQ(got, expected) << "at (" << p.x() << ", " << p.y() << ")";
+    ASSERT_EQ(locate_point_brute_force(cells, p), expected) << "at (" << p.x() << ", " << p.y() << ")";
     if (expected) {
-      EXPECT_TRUE(cell_contains_half_open(cells[*expected], domain, p));
       EXPECT_GE(stats.nodes_visited, std::uint64_t(tree.height() > 0 ? 2 : 1));
+      EXPECT_TRUE(cell_contains_half_open(cells[*expected], domain, p)) << "at (" << p.x() << ", " << p.y() << ")";
+    }
+    // The predicate says no for other cells (a sample of them, and the neighbours that share p).
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (expected && RectId(i) == *expected) continue;
+      if (i % cell_stride != 0 && !contains(cells[i], p)) continue;
+      EXPECT_FALSE(cell_contains_half_open(cells[i], domain, p))
+          << "cell " << i << " at (" << p.x() << ", " << p.y() << ")";
     }
   }
 }
@@ -134,7 +175,7 @@ TEST(PlanarTree, PointLocationOnAGridCellCorners) {
   for (int i = 0; i <= 7; ++i)
     for (int j = 0; j <= 5; ++j) {
       const Vec2 p(Real(i) / 7, Real(j) / 5);
-      EXPECT_EQ(locate_point(tree, p), locate_point_brute_force(cells, p));
+      EXPECT_EQ(locate_point(tree, p), reference_locate(cells, p));
       EXPECT_TRUE(locate_point(tree, p).has_value());
     }
 }
