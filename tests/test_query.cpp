@@ -270,7 +270,8 @@ TEST(QueryOverlap, VisitorCanStopEarly) {
 
 TEST(QueryPlane, MatchesBruteForce) {
   std::vector<std::pair<std::string, TriangleMesh>> meshes = test::procedural_meshes();
-  if (test::shared_meshes_available()) meshes.emplace_back("bunny", test::load_shared_mesh("stanford_bunny_res2.obj"));
+  if (test::use_shared_meshes_if_present())
+    meshes.emplace_back("bunny", test::load_shared_mesh("stanford_bunny_res2.obj"));
   for (const auto& [name, mesh] : meshes) {
     const Tree<Aabb> tree = build_tree<Aabb>(mesh);
     const Aabb box = mesh_bounds(mesh);
