@@ -34,7 +34,17 @@ TEST(Build, InvariantsOnProceduralMeshes) {
       BuildStats stats;
       const Tree<Aabb> tree = build_tree<Aabb>(mesh, settings, &stats);
       expect_valid(tree, name);
-      EXPECT_EQ(stats.rounds, tree.facet_count() > 1 ? stats.rounds : 0);
+      // A round at most halves the nodes and adds at most one level; a single facet takes none.
+      const std::size_t n = tree.facet_count();
+      if (n == 1) {
+        EXPECT_EQ(stats.rounds, 0) << name;
+        EXPECT_EQ(stats.candidate_pairs, 0u) << name;
+      } else {
+        EXPECT_GE(stats.rounds, int(std::ceil(std::log2(double(n))))) << name;
+        EXPECT_GE(stats.rounds, tree.height()) << name;
+        EXPECT_LE(stats.rounds, guaranteed_height_bound(n)) << name;
+        EXPECT_GE(stats.candidate_pairs, n / 2) << name;
+      }
     }
   }
 }
@@ -213,15 +223,22 @@ TEST(Build, RejectsBadMeshes) {
   EXPECT_THROW(build_tree<Aabb>(std::shared_ptr<const TriangleMesh>()), Error);
 }
 
-// The caller's mesh is copied or shared, never modified.
+// The caller's mesh is copied (by reference) or shared (by pointer), never modified: checked on
+// the very objects the builder was given.
 TEST(Build, LeavesCallerMeshUntouched) {
-  const TriangleMesh mesh = make_triangle_soup(200, 5);
-  const TriangleMesh copy = mesh;
-  auto shared = std::make_shared<const TriangleMesh>(mesh);
+  const TriangleMesh original = make_triangle_soup(200, 5);
+  TriangleMesh by_reference = original;
+  const Tree<Aabb> copied = build_tree<Aabb>(by_reference);
+  EXPECT_NE(&copied.mesh(), &by_reference);  // the tree holds its own copy
+  EXPECT_EQ(by_reference.vertices, original.vertices);
+  EXPECT_EQ(by_reference.triangles, original.triangles);
+  EXPECT_EQ(copied.mesh().triangles, original.triangles);
+
+  const auto shared = std::make_shared<const TriangleMesh>(original);
   const Tree<Aabb> tree = build_tree<Aabb>(shared);
   EXPECT_EQ(&tree.mesh(), shared.get());
-  EXPECT_EQ(mesh.vertices, copy.vertices);
-  EXPECT_EQ(mesh.triangles, copy.triangles);
+  EXPECT_EQ(shared->vertices, original.vertices);
+  EXPECT_EQ(shared->triangles, original.triangles);
 }
 
 }  // namespace

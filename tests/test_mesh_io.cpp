@@ -20,6 +20,7 @@
 #include "boxtree/io.h"
 #include "boxtree/mesh.h"
 #include "support/files.h"
+#include "support/meshes.h"
 
 namespace fs = std::filesystem;
 using boxtree::TriangleMesh;
@@ -515,8 +516,8 @@ const std::map<std::string, SharedMeshFacts>& shared_mesh_table() {
 }
 
 TEST(MeshIoShared, EveryMeshLoadsWithTheReadmeCounts) {
-  const fs::path dir = BOXTREE_SHARED_MESHES;
-  if (!fs::is_directory(dir)) GTEST_SKIP() << "shared meshes not found at " << dir;
+  const fs::path dir = boxtree::test::shared_mesh_dir();
+  BOXTREE_REQUIRE_SHARED_PATH(dir.string());
   std::size_t seen = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".obj") continue;
@@ -538,8 +539,8 @@ TEST(MeshIoShared, EveryMeshLoadsWithTheReadmeCounts) {
 }
 
 TEST(MeshIoShared, LeoTest1HasTwentyTwoDegenerateFacets) {
-  const fs::path path = fs::path(BOXTREE_SHARED_MESHES) / "bullet_leoTest1.obj";
-  if (!fs::exists(path)) GTEST_SKIP() << "shared mesh not found: " << path;
+  const fs::path path = fs::path(boxtree::test::shared_mesh_dir()) / "bullet_leoTest1.obj";
+  BOXTREE_REQUIRE_SHARED_PATH(path.string());
   EXPECT_EQ(boxtree::compute_mesh_stats(boxtree::load_mesh(path.string())).degenerate_facets, 22u);
 }
 

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "boxtree/build.h"
 #include "boxtree/stats.h"
@@ -94,6 +97,149 @@ TEST(Stats, MeanWidthCostIsTheExpectedCountOfRandomPlaneCuts) {
       << "sampled " << mean << " vs formula " << s.plane_cost_mean_width;
   // The two measures really differ on this tree, so the check above can tell them apart.
   EXPECT_GT(std::abs(s.plane_cost - s.plane_cost_mean_width), 0.1 * s.plane_cost_mean_width);
+}
+
+// ---- validate_tree, shown broken trees: one invariant of its contract broken at a time ----
+
+// A built tree's arrays, to break one thing and rebuild with Tree's constructor.
+struct TreeParts {
+  std::shared_ptr<const TriangleMesh> mesh;
+  std::vector<Aabb> volumes;
+  std::vector<std::uint32_t> links;
+  int height = 0;
+
+  explicit TreeParts(const Tree<Aabb>& tree) : mesh(tree.shared_mesh()), height(tree.height()) {
+    for (NodeIndex i = 0; i < tree.node_count(); ++i) {
+      volumes.push_back(tree.volume(i));
+      links.push_back(tree.is_leaf(i) ? (Tree<Aabb>::kLeafFlag | tree.facet(i)) : tree.first_child(i));
+    }
+  }
+  Tree<Aabb> tree() const { return Tree<Aabb>(mesh, volumes, links, height); }
+  bool is_leaf(NodeIndex i) const { return (links[i] & Tree<Aabb>::kLeafFlag) != 0; }
+  FacetId facet(NodeIndex i) const { return links[i] & ~Tree<Aabb>::kLeafFlag; }
+  // The first inner node whose two children are leaves.
+  NodeIndex leaf_pair_parent() const {
+    for (NodeIndex i = 0; i < links.size(); ++i)
+      if (!is_leaf(i) && is_leaf(links[i]) && is_leaf(links[i] + 1)) return i;
+    ADD_FAILURE() << "no inner node with two leaf children";
+    return 0;
+  }
+};
+
+class ValidateTree : public ::testing::Test {
+ protected:
+  ValidateTree() : built(build_tree<Aabb>(make_terrain(4, 4, 1))), parts(built) {}
+  Tree<Aabb> built;
+  TreeParts parts;  // a copy of `built`, for each test to break
+  std::size_t n() const { return built.facet_count(); }
+  std::string node(NodeIndex i) const { return std::to_string(i); }
+};
+
+TEST_F(ValidateTree, TheUnbrokenCopyIsValid) {
+  // Every test below breaks this copy in one place: anything it reports comes from that change.
+  ASSERT_EQ(n(), 32u);
+  EXPECT_EQ(validate_tree(parts.tree()), "");
+  EXPECT_EQ(validate_tree(parts.tree(), 1e-12, Containment::facets_in_ancestors), "");
+  EXPECT_EQ(validate_tree(Tree<Aabb>()), "");  // no facets, no nodes
+}
+
+TEST_F(ValidateTree, NoNodes) { EXPECT_EQ(validate_tree(Tree<Aabb>(parts.mesh, {}, {}, 0)), "tree has no nodes"); }
+
+TEST_F(ValidateTree, NodeCountNot2nMinus1) {
+  parts.volumes.push_back(parts.volumes.back());
+  parts.links.push_back(parts.links.back());
+  EXPECT_EQ(validate_tree(parts.tree()), "node count 64 != 2n-1 = 63");
+}
+
+TEST_F(ValidateTree, LeafNamesAFacetOutOfRange) {
+  const NodeIndex leaf = parts.links[parts.leaf_pair_parent()];
+  parts.links[leaf] = Tree<Aabb>::kLeafFlag | FacetId(n());
+  EXPECT_EQ(validate_tree(parts.tree()), "leaf " + node(leaf) + " names facet 32 of 32");
+}
+
+TEST_F(ValidateTree, FacetInTwoLeavesAndAnotherInNone) {
+  // Sibling leaves both name the second one's facet (with its box: every volume still holds its
+  // facet and sits inside its parent).
+  const NodeIndex first = parts.links[parts.leaf_pair_parent()];
+  const FacetId lost = parts.facet(first), doubled = parts.facet(first + 1);
+  parts.links[first] = parts.links[first + 1];
+  parts.volumes[first] = parts.volumes[first + 1];
+  const std::string expected = lost < doubled ? "facet " + std::to_string(lost) + " is in 0 leaves"
+                                              : "facet " + std::to_string(doubled) + " is in 2 leaves";
+  EXPECT_EQ(validate_tree(parts.tree()), expected);
+}
+
+TEST_F(ValidateTree, LeafVolumeMissesItsFacet) {
+  // The leaf's box shrunk to a point near its centre: still inside its parent, but no corner of
+  // its facet (a terrain's corners lie on a grid of 25 in x and y).
+  const NodeIndex leaf = parts.links[parts.leaf_pair_parent()];
+  const Vec3 point = parts.volumes[leaf].center() + Vec3(0.123, 0.0456, 0);
+  parts.volumes[leaf] = Aabb{point, point};
+  EXPECT_EQ(validate_tree(parts.tree()),
+            "leaf " + node(leaf) + " does not contain corner 0 of facet " + std::to_string(parts.facet(leaf)));
+}
+
+TEST_F(ValidateTree, ChildOutsideItsParent) {
+  const NodeIndex parent = parts.leaf_pair_parent();
+  const NodeIndex child = parts.links[parent];
+  parts.volumes[child].max += Vec3::Constant(1e-3);  // still holds its facet
+  EXPECT_EQ(validate_tree(parts.tree()), "volume of node " + node(child) + " is not inside its parent " + node(parent));
+  // Within the tolerance (relative to the root's size, here about 200) it passes.
+  EXPECT_EQ(validate_tree(parts.tree(), 1e-4), "");
+  // With facets_in_ancestors, a child may stick out of its parent.
+  EXPECT_EQ(validate_tree(parts.tree(), 1e-12, Containment::facets_in_ancestors), "");
+}
+
+TEST_F(ValidateTree, AncestorMissesAFacetBelowIt) {
+  // An inner node's box shrunk to a point off the terrain's grid of corners.
+  const NodeIndex parent = parts.leaf_pair_parent();
+  const NodeIndex first = parts.links[parent];
+  const Vec3 point = parts.volumes[parent].center() + Vec3(0.123, 0.0456, 0);
+  parts.volumes[parent] = Aabb{point, point};
+  EXPECT_EQ(validate_tree(parts.tree(), 1e-12, Containment::facets_in_ancestors),
+            "node " + node(parent) + " does not contain corner 0 of facet " + std::to_string(parts.facet(first)) +
+                " below it");
+  // children_in_parent sees the same tree as a child outside its parent.
+  EXPECT_EQ(validate_tree(parts.tree()), "volume of node " + node(first) + " is not inside its parent " + node(parent));
+}
+
+TEST_F(ValidateTree, ChildLinkBackwardsOrPastTheEnd) {
+  const NodeIndex parent = parts.leaf_pair_parent();
+  parts.links[parent] = parent;
+  EXPECT_EQ(validate_tree(parts.tree()), "node " + node(parent) + " has child link " + node(parent));
+  parts.links[parent] = std::uint32_t(parts.links.size() - 1);  // its second child would be past the end
+  EXPECT_EQ(validate_tree(parts.tree()),
+            "node " + node(parent) + " has child link " + std::to_string(parts.links.size() - 1));
+}
+
+TEST_F(ValidateTree, NodeReachedTwice) {
+  // Node 1 takes node 2's children (and the root's box, so that they fit inside it): they are
+  // reached through both.
+  ASSERT_EQ(parts.links[0], 1u);
+  ASSERT_FALSE(parts.is_leaf(1));
+  ASSERT_FALSE(parts.is_leaf(2));
+  parts.links[1] = parts.links[2];
+  parts.volumes[1] = parts.volumes[0];
+  EXPECT_EQ(validate_tree(parts.tree()), "node " + node(parts.links[2]) + " reached twice");
+}
+
+TEST_F(ValidateTree, NodeUnreachable) {
+  // An inner node turned into a leaf of its first child's facet (its box holds it): its two
+  // children are cut off, and nothing else changes.
+  const NodeIndex parent = parts.leaf_pair_parent();
+  const NodeIndex first = parts.links[parent];
+  parts.links[parent] = parts.links[first];
+  EXPECT_EQ(validate_tree(parts.tree()), "node " + node(first) + " is unreachable");
+}
+
+TEST_F(ValidateTree, StoredHeightWrong) {
+  const int real = parts.height;
+  parts.height = real + 1;
+  EXPECT_EQ(validate_tree(parts.tree()),
+            "stored height " + std::to_string(real + 1) + " != real height " + std::to_string(real));
+  parts.height = real - 1;
+  EXPECT_EQ(validate_tree(parts.tree()),
+            "stored height " + std::to_string(real - 1) + " != real height " + std::to_string(real));
 }
 
 }  // namespace

@@ -454,7 +454,7 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
 // ---------------------------------------------------------------------------------------------
 // Triangle / volumes and shapes
 
-bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box) {
+bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& query) {
   // Akenine-Moller, "Fast 3D Triangle-Box Overlap Testing", JGT 6(1), 2001. A zero axis (a
   // degenerate triangle's normal, an edge parallel to a box axis or of zero length) projects
   // everything to 0 with radius 0 and so never separates: no special case is needed, and for a
@@ -462,7 +462,16 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
   // separating axes of a segment against a box (Ericson 5.3.3).
   // NaN anywhere (a NaN query box, or an oriented box with a NaN centre or axis, which reaches
   // here as NaN corners) would fail every separating comparison, i.e. "overlap".
-  if (a.hasNaN() || b.hasNaN() || c.hasNaN() || box.min.hasNaN() || box.max.hasNaN()) return false;
+  if (a.hasNaN() || b.hasNaN() || c.hasNaN() || query.min.hasNaN() || query.max.hasNaN()) return false;
+  // An infinite side (a half-space query) would make the centre or the half extents below
+  // infinite or NaN, and NaN never separates. The triangle lies in its own bounds, so the box
+  // clipped to them overlaps it exactly when the box does, and is finite for a finite triangle.
+  Aabb box = query;
+  if (!box.min.allFinite() || !box.max.allFinite()) {
+    const Aabb bounds = Aabb::from_triangle(a, b, c);
+    box.min = box.min.cwiseMax(bounds.min);
+    box.max = box.max.cwiseMin(bounds.max);
+  }
   // Box face normals first, on the untranslated coordinates (no rounding at all).
   for (int k = 0; k < 3; ++k) {
     if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;
@@ -504,13 +513,16 @@ bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Ob
 }
 
 bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& sphere) {
+  // d^2 <= r^2 alone would let a negative radius act as its magnitude.
+  if (!is_valid(sphere)) return false;
   return (closest_point_on_triangle(sphere.center, a, b, c) - sphere.center).squaredNorm() <=
          sphere.radius * sphere.radius;
 }
 
 bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
-  // A NaN end would make every orientation test of segment_meets_triangle false, i.e. "meets".
-  if (!capsule.p0.allFinite() || !capsule.p1.allFinite()) return false;
+  // A NaN end would make every orientation test of segment_meets_triangle false, i.e. "meets";
+  // d^2 <= r^2 alone would let a negative radius act as its magnitude.
+  if (!is_valid(capsule)) return false;
   return segment_triangle_distance_squared(capsule.p0, capsule.p1, a, b, c) <= capsule.radius * capsule.radius;
 }
 
@@ -675,7 +687,7 @@ bool overlaps(const Aabb& a, const Aabb& b, const RigidTransform& a_from_b) {
 }
 
 bool overlaps(const Aabb& box, const Capsule& capsule) {
-  if (box.is_empty()) return false;
+  if (box.is_empty() || !is_valid(capsule)) return false;
   // Never miss a true contact: pad the radius by a few hundred ulps of the coordinates involved,
   // which covers the rounding of the distance computation (conservative, not exact).
   const Real scale = box.min.cwiseAbs().maxCoeff() + box.max.cwiseAbs().maxCoeff() + capsule.p0.cwiseAbs().maxCoeff() +

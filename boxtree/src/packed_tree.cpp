@@ -772,7 +772,7 @@ template <class Shape>
 void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
                    FacetTest test) {
   StatsSink sink(stats);
-  if (tree.empty()) return;
+  if (tree.empty() || !is_valid(shape)) return;  // an invalid shape matches nothing (shapes.h)
   ++sink.local.volume_tests;
   if (!overlaps(tree.bounds(), shape)) return;
   const TriangleMesh& mesh = tree.mesh();

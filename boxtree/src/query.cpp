@@ -144,11 +144,13 @@ void all_hits_of(const View& tree, const Ray& ray, FunctionRef<bool(const RayHit
       sink.local);
 }
 
+// An invalid shape (shapes.h) matches nothing, in both FacetTest modes: checked here once, so
+// that no volume or triangle test has to read a negative radius or an inverted box the same way.
 template <class View, class Shape>
 void overlap_of(const View& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
                 FacetTest test) {
   StatsSink sink(stats);
-  if (tree.empty()) return;
+  if (tree.empty() || !is_valid(shape)) return;
   const TriangleMesh& mesh = tree.mesh();
   walk(
       tree, [&](const auto& v) { return overlaps(v, shape); },
@@ -165,7 +167,7 @@ void overlap_of(const View& tree, const Shape& shape, FunctionRef<bool(FacetId)>
 template <class View>
 void plane_of(const View& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
   StatsSink sink(stats);
-  if (tree.empty()) return;
+  if (tree.empty() || !is_valid(plane)) return;
   const TriangleMesh& mesh = tree.mesh();
   walk(
       tree, [&](const auto& v) { return overlaps(v, plane); },

@@ -38,11 +38,6 @@ constexpr Real kFlat = 1e-3;
 // expression, so a fitted box contains its input points by contains() with no tolerance at all.
 Vec3 to_local(const Obb& box, const Vec3& p) { return box.axes.transpose() * (p - box.center); }
 
-bool valid_box(const Obb& box) {
-  return box.center.allFinite() && box.axes.allFinite() && (box.half_extents.array() >= 0).all() &&
-         box.half_extents.allFinite();
-}
-
 bool is_flat(const Vec3& half_extents) { return half_extents.minCoeff() <= kFlat * half_extents.maxCoeff(); }
 
 // Box/box in world (or any common) frame. When both boxes are flat and the 15 axes say
@@ -235,18 +230,26 @@ bool contains(const Obb& outer, const Obb& inner, Real tolerance) {
 }
 
 bool overlaps(const Obb& box, const Aabb& query) {
-  if (query.is_empty() || !query.min.allFinite() || !query.max.allFinite()) return false;
-  const Obb as_box{query.center(), Mat3::Identity(), (query.max - query.min) * Real(0.5)};
+  if (!is_valid(query)) return false;
+  // Infinite sides (half-spaces, shapes.h) clipped to the box's bounds, which hold the box: the
+  // same answer, in finite arithmetic.
+  Aabb clipped = query;
+  if (!query.min.allFinite() || !query.max.allFinite()) {
+    const Aabb bounds = bounding_aabb(box);
+    clipped = {query.min.cwiseMax(bounds.min), query.max.cwiseMin(bounds.max)};
+    if (!is_valid(clipped) || !clipped.min.allFinite() || !clipped.max.allFinite()) return false;
+  }
+  const Obb as_box{clipped.center(), Mat3::Identity(), (clipped.max - clipped.min) * Real(0.5)};
   return obb_obb(as_box, box);
 }
 
 bool overlaps(const Obb& box, const Obb& query) {
-  if (!valid_box(query)) return false;
+  if (!is_valid(query)) return false;
   return obb_obb(box, query);
 }
 
 bool overlaps(const Obb& box, const Sphere& query) {
-  if (!(query.radius >= 0) || !query.center.allFinite()) return false;
+  if (!is_valid(query)) return false;
   // Clamp in the box frame (Ericson 5.1.4): the closest point of the box to the center.
   const Vec3 x = to_local(box, query.center);
   const Vec3 closest = x.cwiseMax(-box.half_extents).cwiseMin(box.half_extents);
@@ -256,7 +259,7 @@ bool overlaps(const Obb& box, const Sphere& query) {
 }
 
 bool overlaps(const Obb& box, const Capsule& query) {
-  if (!(query.radius >= 0) || !query.p0.allFinite() || !query.p1.allFinite()) return false;
+  if (!is_valid(query)) return false;
   // In the box frame the box is an AABB; the AABB/capsule test is exact up to its own slack
   // (256 ulps of the magnitudes, far above the rounding of this change of frame).
   const Aabb local{-box.half_extents, box.half_extents};

@@ -281,20 +281,25 @@ bool contains(const Prism& outer, const Prism& inner, Real tolerance) {
 }
 
 bool overlaps(const Prism& prism, const Aabb& query) {
-  if (query.is_empty() || !query.min.allFinite() || !query.max.allFinite()) return false;
-  return sat_overlap(polytope_of(prism), polytope_of(query));
+  if (!is_valid(query)) return false;
+  // Infinite sides (half-spaces, shapes.h) clipped to the prism's bounds, which hold the prism:
+  // the same answer, in finite arithmetic.
+  Aabb clipped = query;
+  if (!query.min.allFinite() || !query.max.allFinite()) {
+    const Aabb bounds = bounding_aabb(prism);
+    clipped = {query.min.cwiseMax(bounds.min), query.max.cwiseMin(bounds.max)};
+    if (!is_valid(clipped) || !clipped.min.allFinite() || !clipped.max.allFinite()) return false;
+  }
+  return sat_overlap(polytope_of(prism), polytope_of(clipped));
 }
 
 bool overlaps(const Prism& prism, const Obb& query) {
-  if (!query.center.allFinite() || !query.axes.allFinite() || !query.half_extents.allFinite() ||
-      !(query.half_extents.array() >= 0).all()) {
-    return false;
-  }
+  if (!is_valid(query)) return false;
   return sat_overlap(polytope_of(prism), polytope_of(query));
 }
 
 bool overlaps(const Prism& prism, const Sphere& query) {
-  if (!(query.radius >= 0) || !query.center.allFinite()) return false;
+  if (!is_valid(query)) return false;
   // With the axis normal to the base, the prism is the product of the triangle and [0, h] along
   // the axis, so the squared distance is the in-plane one plus the axial one: move the point
   // along the axis to the nearest height in [0, h] and take its distance to the base triangle.
@@ -311,7 +316,7 @@ bool overlaps(const Prism& prism, const Sphere& query) {
 }
 
 bool overlaps(const Prism& prism, const Capsule& query) {
-  if (!(query.radius >= 0) || !query.p0.allFinite() || !query.p1.allFinite()) return false;
+  if (!is_valid(query)) return false;
   const auto c = corners(prism);
   const PrismSlabs s = slabs_of(prism);
   const Real scale =

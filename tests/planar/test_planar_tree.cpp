@@ -3,8 +3,12 @@
 // brute force on every generator, and the stabbing number against brute force.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "boxtree/error.h"
 #include "boxtree/generate.h"
@@ -86,8 +90,38 @@ TEST(PlanarTree, PairingInvariantsOnManySmallPartitions) {
   }
 }
 
-// Point location against a scan of every cell, at random points, at every cell corner and edge
-// midpoint (points shared by several cells: the half-open rule picks one), and outside.
+// The reference for point location, written apart from the library's predicates: the cells
+// that hold p, each cell taken as [min, max) on both axes after a point on the domain's max side
+// (closed there, by locate_point's contract) is moved one ulp back inside. In a partition at
+// most one cell holds any point.
+std::vector<RectId> cells_holding(const std::vector<Rect>& cells, Vec2 p) {
+  const Real inf = std::numeric_limits<Real>::infinity();
+  Real max_x = -inf, max_y = -inf;
+  for (const Rect& c : cells) {
+    max_x = std::max(max_x, c.max.x());
+    max_y = std::max(max_y, c.max.y());
+  }
+  if (p.x() == max_x) p.x() = std::nextafter(p.x(), -inf);
+  if (p.y() == max_y) p.y() = std::nextafter(p.y(), -inf);
+  std::vector<RectId> holding;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const Rect& c = cells[i];
+    if (c.min.x() <= p.x() && p.x() < c.max.x() && c.min.y() <= p.y() && p.y() < c.max.y())
+      holding.push_back(RectId(i));
+  }
+  return holding;
+}
+
+std::optional<RectId> reference_locate(const std::vector<Rect>& cells, const Vec2& p) {
+  const std::vector<RectId> holding = cells_holding(cells, p);
+  EXPECT_LE(holding.size(), 1u) << "cells of a partition overlap at (" << p.x() << ", " << p.y() << ")";
+  if (holding.empty()) return std::nullopt;
+  return holding.front();
+}
+
+// Point location against the reference, at random points, at every cell corner and edge
+// midpoint (points shared by several cells: the half-open rule picks one), and outside; the
+// library's own scan (locate_point_brute_force) and its cell predicate against it too.
 void check_locate(const std::vector<Rect>& cells, const std::string& what) {
   SCOPED_TRACE(what);
   const PlanarTree tree = build_planar_tree(cells);
@@ -108,14 +142,23 @@ void check_locate(const std::vector<Rect>& cells, const std::string& what) {
     points.emplace_back(c.min.x(), c.center().y());
     points.push_back(c.center());
   }
+  const std::size_t cell_stride = std::max<std::size_t>(1, cells.size() / 64);
   for (const Vec2& p : points) {
-    const std::optional<RectId> expected = locate_point_brute_force(cells, p);
+    const std::optional<RectId> expected = reference_locate(cells, p);
     PlanarQueryStats stats;
     const std::optional<RectId> got = locate_point(tree, p, &stats);
     ASSERT_EQ(got, expected) << "at (" << p.x() << ", " << p.y() << ")";
+    ASSERT_EQ(locate_point_brute_force(cells, p), expected) << "at (" << p.x() << ", " << p.y() << ")";
     if (expected) {
-      EXPECT_TRUE(cell_contains_half_open(cells[*expected], domain, p));
       EXPECT_GE(stats.nodes_visited, std::uint64_t(tree.height() > 0 ? 2 : 1));
+      EXPECT_TRUE(cell_contains_half_open(cells[*expected], domain, p)) << "at (" << p.x() << ", " << p.y() << ")";
+    }
+    // The predicate says no for other cells (a sample of them, and the neighbours that share p).
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (expected && RectId(i) == *expected) continue;
+      if (i % cell_stride != 0 && !contains(cells[i], p)) continue;
+      EXPECT_FALSE(cell_contains_half_open(cells[i], domain, p))
+          << "cell " << i << " at (" << p.x() << ", " << p.y() << ")";
     }
   }
 }
@@ -132,7 +175,7 @@ TEST(PlanarTree, PointLocationOnAGridCellCorners) {
   for (int i = 0; i <= 7; ++i)
     for (int j = 0; j <= 5; ++j) {
       const Vec2 p(Real(i) / 7, Real(j) / 5);
-      EXPECT_EQ(locate_point(tree, p), locate_point_brute_force(cells, p));
+      EXPECT_EQ(locate_point(tree, p), reference_locate(cells, p));
       EXPECT_TRUE(locate_point(tree, p).has_value());
     }
 }
@@ -172,6 +215,134 @@ TEST(PlanarTree, SingleCell) {
   EXPECT_EQ(locate_point(tree, Vec2(4, 5)), std::optional<RectId>(0));  // the domain's max sides are closed
   EXPECT_EQ(locate_point(tree, Vec2(5, 4)), std::nullopt);
   EXPECT_EQ(stabbing_number(tree), 1u);
+}
+
+// ---- validate_planar_tree, shown broken trees: one invariant of its contract at a time ----
+
+// A built tree's arrays, to break one thing and rebuild with PlanarTree's constructor.
+struct PlanarParts {
+  std::vector<Rect> cells, boxes;
+  std::vector<std::uint32_t> links;
+  int height = 0;
+
+  explicit PlanarParts(const PlanarTree& tree) : cells(tree.cells()), height(tree.height()) {
+    for (std::size_t i = 0; i < tree.node_count(); ++i) {
+      const PlanarNode node = PlanarNode(i);
+      boxes.push_back(tree.box(node));
+      links.push_back(tree.is_leaf(node) ? (PlanarTree::kLeafFlag | tree.cell_id(node)) : tree.first_child(node));
+    }
+  }
+  PlanarTree tree() const { return PlanarTree(cells, boxes, links, height); }
+  bool is_leaf(std::size_t i) const { return (links[i] & PlanarTree::kLeafFlag) != 0; }
+  // The first inner node whose two children are leaves.
+  std::size_t leaf_pair_parent() const {
+    for (std::size_t i = 0; i < links.size(); ++i)
+      if (!is_leaf(i) && is_leaf(links[i]) && is_leaf(links[i] + 1)) return i;
+    ADD_FAILURE() << "no inner node with two leaf children";
+    return 0;
+  }
+};
+
+// The message validate_planar_tree throws, or "" if it accepts the tree.
+std::string planar_problem(const PlanarTree& tree) {
+  try {
+    validate_planar_tree(tree);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+class ValidatePlanarTree : public ::testing::Test {
+ protected:
+  ValidatePlanarTree() : parts(build_planar_tree(make_grid_partition(4, 4))) {}
+  PlanarParts parts;  // a copy of a valid tree, for each test to break
+};
+
+TEST_F(ValidatePlanarTree, TheUnbrokenCopyIsValid) {
+  ASSERT_EQ(parts.links.size(), 31u);
+  EXPECT_EQ(planar_problem(parts.tree()), "");
+}
+
+TEST_F(ValidatePlanarTree, Empty) { EXPECT_EQ(planar_problem(PlanarTree()), "planar tree: empty"); }
+
+TEST_F(ValidatePlanarTree, NodeCountNot2nMinus1) {
+  parts.boxes.push_back(parts.boxes.back());
+  parts.links.push_back(parts.links.back());
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: node count is not 2n-1");
+}
+
+TEST_F(ValidatePlanarTree, LeafWithACellOutOfRange) {
+  const std::size_t leaf = parts.links[parts.leaf_pair_parent()];
+  parts.links[leaf] = PlanarTree::kLeafFlag | std::uint32_t(parts.cells.size());
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: leaf " + std::to_string(leaf) + " has a bad or repeated cell");
+}
+
+TEST_F(ValidatePlanarTree, TwoLeavesWithOneCell) {
+  // Sibling leaves both name the second one's cell, with its box: the first of them met (from
+  // the last node down) passes, the other repeats it.
+  const std::size_t first = parts.links[parts.leaf_pair_parent()];
+  parts.links[first] = parts.links[first + 1];
+  parts.boxes[first] = parts.boxes[first + 1];
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: leaf " + std::to_string(first) + " has a bad or repeated cell");
+}
+
+TEST_F(ValidatePlanarTree, LeafBoxIsNotItsCell) {
+  const std::size_t leaf = parts.links[parts.leaf_pair_parent()];
+  parts.boxes[leaf].max.x() -= 0.01;
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: leaf " + std::to_string(leaf) + "'s box is not its cell");
+}
+
+TEST_F(ValidatePlanarTree, ChildLinkBackwardsOrPastTheEnd) {
+  const std::size_t parent = parts.leaf_pair_parent();
+  const std::string expected = "planar tree: node " + std::to_string(parent) + " has bad children";
+  parts.links[parent] = std::uint32_t(parent);
+  EXPECT_EQ(planar_problem(parts.tree()), expected);
+  parts.links[parent] = std::uint32_t(parts.links.size() - 1);
+  EXPECT_EQ(planar_problem(parts.tree()), expected);
+}
+
+TEST_F(ValidatePlanarTree, ParentBoxNotTheSmallestEnclosing) {
+  const std::size_t parent = parts.leaf_pair_parent();
+  const std::string expected =
+      "planar tree: node " + std::to_string(parent) + "'s box is not the smallest enclosing its children";
+  const Rect exact = parts.boxes[parent];
+  parts.boxes[parent].max.y() += 0.01;  // encloses them, but not the smallest
+  EXPECT_EQ(planar_problem(parts.tree()), expected);
+  parts.boxes[parent] = exact;
+  parts.boxes[parent].min.x() += 0.01;  // does not enclose them
+  EXPECT_EQ(planar_problem(parts.tree()), expected);
+}
+
+TEST_F(ValidatePlanarTree, NodeWithTwoParents) {
+  // Node 1 takes node 2's children and box, and the root's box is made to fit: every box is the
+  // smallest around its children, but nodes 1 and 2 share them.
+  ASSERT_EQ(parts.links[0], 1u);
+  ASSERT_FALSE(parts.is_leaf(1));
+  ASSERT_FALSE(parts.is_leaf(2));
+  parts.links[1] = parts.links[2];
+  parts.boxes[1] = parts.boxes[0] = parts.boxes[2];
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: a node has two parents");
+}
+
+TEST_F(ValidatePlanarTree, NodeUnreachable) {
+  // By hand, over 2 x 2 cells: node 1 is nobody's child, and shares its children 4, 5 with node
+  // 2 (which comes after it, so the two-parents check cannot see it):
+  //   0 -> (2, 3)   1 -> (4, 5)   2 -> (4, 5)   3, 4, 5, 6: leaves of cells 0..3
+  const std::vector<Rect> cells = make_grid_partition(2, 2);
+  const std::uint32_t leaf = PlanarTree::kLeafFlag;
+  const std::vector<std::uint32_t> links = {2, 4, 4, leaf | 0, leaf | 1, leaf | 2, leaf | 3};
+  std::vector<Rect> boxes = {Rect(), Rect(), Rect(), cells[0], cells[1], cells[2], cells[3]};
+  boxes[1] = boxes[2] = Rect::enclosing(cells[1], cells[2]);
+  boxes[0] = Rect::enclosing(boxes[2], cells[0]);
+  EXPECT_EQ(planar_problem(PlanarTree(cells, boxes, links, 2)), "planar tree: a node is unreachable");
+}
+
+TEST_F(ValidatePlanarTree, StoredHeightWrong) {
+  ++parts.height;
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: stored height is wrong");
+  parts.height -= 2;
+  EXPECT_EQ(planar_problem(parts.tree()), "planar tree: stored height is wrong");
 }
 
 TEST(PlanarTree, InvalidInputIsRejected) {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// Test meshes: procedural ones (always there) and the real ones in ../shared/meshes (tests that
-// need them skip with a message when the folder is absent).
+// Test meshes: procedural ones (always there) and the real ones in ../shared/meshes. Tests that
+// need the real ones skip with a message when they are absent, except in CI (environment
+// CI=true), where the meshes are part of the suite and their absence fails the test.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,7 +17,13 @@
 
 namespace boxtree::test {
 
-inline std::string shared_mesh_dir() { return BOXTREE_SHARED_MESHES; }
+// The folder of the real meshes: the build's (BOXTREE_SHARED_MESHES), or the environment's
+// BOXTREE_SHARED_MESHES if set (tests/CMakeLists.txt points it at a missing folder to check the
+// CI rule below).
+inline std::string shared_mesh_dir() {
+  const char* dir = std::getenv("BOXTREE_SHARED_MESHES");
+  return dir != nullptr && *dir != '\0' ? std::string(dir) : std::string(BOXTREE_SHARED_MESHES);
+}
 
 inline bool shared_meshes_available() { return std::filesystem::exists(shared_mesh_dir() + "/stanford_bunny.obj"); }
 
@@ -42,11 +49,37 @@ inline std::vector<std::string> shared_mesh_names() {
 
 inline TriangleMesh load_shared_mesh(const std::string& name) { return load_mesh(shared_mesh_dir() + "/" + name); }
 
-#define BOXTREE_REQUIRE_SHARED_MESHES()                                                                 \
-  do {                                                                                                  \
-    if (!::boxtree::test::shared_meshes_available())                                                    \
-      GTEST_SKIP() << "real meshes not found in " << ::boxtree::test::shared_mesh_dir() << ": skipped"; \
+// True in CI (CI=true, as GitHub Actions and most CI services set it).
+inline bool running_in_ci() {
+  const char* ci = std::getenv("CI");
+  return ci != nullptr && std::string(ci) == "true";
+}
+
+// Why a test cannot use `path`, in the words both macros below print.
+inline std::string missing_shared_message(const std::string& path) {
+  return "real meshes not found: " + path + (running_in_ci() ? " (CI=true: they are required)" : ": skipped");
+}
+
+// Skips the test if `path` (a shared mesh or the folder) is missing; fails it in CI.
+#define BOXTREE_REQUIRE_SHARED_PATH(path)                                                                             \
+  do {                                                                                                                \
+    const std::string boxtree_required_path = (path);                                                                 \
+    if (!std::filesystem::exists(boxtree_required_path)) {                                                            \
+      if (::boxtree::test::running_in_ci()) FAIL() << ::boxtree::test::missing_shared_message(boxtree_required_path); \
+      GTEST_SKIP() << ::boxtree::test::missing_shared_message(boxtree_required_path);                                 \
+    }                                                                                                                 \
   } while (false)
+
+#define BOXTREE_REQUIRE_SHARED_MESHES() \
+  BOXTREE_REQUIRE_SHARED_PATH(::boxtree::test::shared_mesh_dir() + "/stanford_bunny.obj")
+
+// For tests that add the real meshes to procedural ones when they are there: whether they are,
+// with a test failure in CI when they are not.
+inline bool use_shared_meshes_if_present() {
+  if (shared_meshes_available()) return true;
+  if (running_in_ci()) ADD_FAILURE() << missing_shared_message(shared_mesh_dir() + "/stanford_bunny.obj");
+  return false;
+}
 
 // Multiplies test sizes (env BOXTREE_TEST_SCALE, default 1) for longer local runs.
 inline double test_scale() {

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // Exact-as-practical tests between one triangle and a query shape. These are the leaf tests of
-// every query and the reference that the brute-force cross-checks use; all are closed sets
-// (touching counts as overlapping). Triangles may be degenerate (zero area); no test divides by
-// zero or returns NaN for them.
+// every query; all are closed sets (touching counts as overlapping). An invalid query shape
+// (shapes.h: a negative or NaN radius, an inverted box, ...) overlaps nothing; infinite sides of
+// an Aabb are handled exactly. Triangles may be degenerate (zero area); no test divides by zero
+// or returns NaN for them.
 #include "boxtree/shapes.h"
 #include "boxtree/volume/aabb.h"
 

@@ -53,6 +53,29 @@ struct Obb {
   Vec3 half_extents = Vec3::Zero();
 };
 
+// What every overlap and plane query accepts, as is_valid(Ray) above for rays: an invalid shape
+// matches nothing, wherever it lies and whatever its size's magnitude would touch, in every tree
+// form (Tree<V> of every volume kind, hybrids included, PackedAabbTree, PackedPrismTree, AnyTree)
+// and in both FacetTest modes. The queries check this once, on entry; the triangle tests of
+// geometry.h and the volume tests of a sphere or capsule (volume/*.h) answer "no overlap" too.
+//  - Sphere: finite centre, radius >= 0 (not NaN; +infinity is all of space). A negative radius
+//    is not read as its magnitude: Sphere{c, -1} matches nothing even where Sphere{c, 1} touches
+//    the mesh.
+//  - Capsule: finite ends, radius as a sphere's (p0 == p1 is a sphere).
+//  - Obb: finite centre, axes and half extents, half extents >= 0 (zero: a rectangle or segment).
+//  - Aabb (volume/aabb.h): no NaN, min <= max on every axis; infinite sides are allowed (a
+//    half-space or all of space).
+//  - Plane: finite normal, not zero, and finite offset.
+inline bool is_valid(const Sphere& s) { return s.center.allFinite() && s.radius >= 0; }
+inline bool is_valid(const Capsule& c) { return c.p0.allFinite() && c.p1.allFinite() && c.radius >= 0; }
+inline bool is_valid(const Obb& box) {
+  return box.center.allFinite() && box.axes.allFinite() && box.half_extents.allFinite() &&
+         (box.half_extents.array() >= 0).all();
+}
+inline bool is_valid(const Plane& plane) {
+  return plane.normal.allFinite() && !plane.normal.isZero(0) && std::isfinite(plane.offset);
+}
+
 // x_a = rotation * x_b + translation. Used as `a_from_b` in tree-vs-tree queries.
 struct RigidTransform {
   Mat3 rotation = Mat3::Identity();

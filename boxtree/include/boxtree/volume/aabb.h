@@ -61,17 +61,23 @@ inline bool contains(const Aabb& outer, const Aabb& inner, Real tolerance = 0) {
          (inner.max.array() <= outer.max.array() + tolerance).all();
 }
 
+// The query shape rule of shapes.h: no NaN, min <= max on every axis (infinite sides allowed).
+// Aabb::empty() is not a valid query shape.
+inline bool is_valid(const Aabb& box) { return (box.min.array() <= box.max.array()).all(); }
+
 inline bool overlaps(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
+// False for an invalid sphere (shapes.h).
 inline bool overlaps(const Aabb& box, const Sphere& s) {
+  if (!is_valid(s)) return false;
   const Vec3 closest = s.center.cwiseMax(box.min).cwiseMin(box.max);
   return (closest - s.center).squaredNorm() <= s.radius * s.radius;
 }
 
 bool overlaps(const Aabb& box, const Obb& obb);
-bool overlaps(const Aabb& box, const Capsule& capsule);
+bool overlaps(const Aabb& box, const Capsule& capsule);  // false for an invalid capsule (shapes.h)
 bool overlaps(const Aabb& box, const Plane& plane);
 
 // Box `b` given in frame B, box `a` in frame A, x_a = a_from_b(x_b): exact separating-axis test
