@@ -467,11 +467,8 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
   // infinite or NaN, and NaN never separates. The triangle lies in its own bounds, so the box
   // clipped to them overlaps it exactly when the box does, and is finite for a finite triangle.
   Aabb box = query;
-  if (!box.min.allFinite() || !box.max.allFinite()) {
-    const Aabb bounds = Aabb::from_triangle(a, b, c);
-    box.min = box.min.cwiseMax(bounds.min);
-    box.max = box.max.cwiseMin(bounds.max);
-  }
+  if ((!box.min.allFinite() || !box.max.allFinite()) && !clip_infinite_sides(box, Aabb::from_triangle(a, b, c)))
+    return false;
   // Box face normals first, on the untranslated coordinates (no rounding at all).
   for (int k = 0; k < 3; ++k) {
     if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;

@@ -234,11 +234,8 @@ bool overlaps(const Obb& box, const Aabb& query) {
   // Infinite sides (half-spaces, shapes.h) clipped to the box's bounds, which hold the box: the
   // same answer, in finite arithmetic.
   Aabb clipped = query;
-  if (!query.min.allFinite() || !query.max.allFinite()) {
-    const Aabb bounds = bounding_aabb(box);
-    clipped = {query.min.cwiseMax(bounds.min), query.max.cwiseMin(bounds.max)};
-    if (!is_valid(clipped) || !clipped.min.allFinite() || !clipped.max.allFinite()) return false;
-  }
+  if ((!query.min.allFinite() || !query.max.allFinite()) && !clip_infinite_sides(clipped, bounding_aabb(box)))
+    return false;
   const Obb as_box{clipped.center(), Mat3::Identity(), (clipped.max - clipped.min) * Real(0.5)};
   return obb_obb(as_box, box);
 }

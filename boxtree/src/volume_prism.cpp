@@ -285,11 +285,8 @@ bool overlaps(const Prism& prism, const Aabb& query) {
   // Infinite sides (half-spaces, shapes.h) clipped to the prism's bounds, which hold the prism:
   // the same answer, in finite arithmetic.
   Aabb clipped = query;
-  if (!query.min.allFinite() || !query.max.allFinite()) {
-    const Aabb bounds = bounding_aabb(prism);
-    clipped = {query.min.cwiseMax(bounds.min), query.max.cwiseMin(bounds.max)};
-    if (!is_valid(clipped) || !clipped.min.allFinite() || !clipped.max.allFinite()) return false;
-  }
+  if ((!query.min.allFinite() || !query.max.allFinite()) && !clip_infinite_sides(clipped, bounding_aabb(prism)))
+    return false;
   return sat_overlap(polytope_of(prism), polytope_of(clipped));
 }
 

@@ -463,16 +463,20 @@ TEST(OdeGeom, PlaneMatchesOdeTrimesh) {
   EXPECT_EQ(collide(mesh, plane, ours, 16), 0);
 }
 
+// A cube of half size 0.5 as dCreateConvex takes it: planes (n, d), points, polygons.
+const dReal kCubePlanes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+const dReal kCubePoints[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
+                             0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+const unsigned kCubePolygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
+                                  4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+
 // Convex geoms need their points registered (ODE has no getter); unregistered ones give nothing.
 TEST(OdeGeom, ConvexWithRegisteredPoints) {
   Space space;
   dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
-  // A cube of half size 0.5 as a dConvex: planes (n, d), points, polygons.
-  static const dReal planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
-  static const dReal points[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
-                                 0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
-  static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
-                                      4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  const dReal* planes = kCubePlanes;
+  const dReal* points = kCubePoints;
+  const unsigned* polygons = kCubePolygons;
   dGeomID convex = boxtree::ode::create_convex(space.id, planes, 6, points, 8, polygons);
   dGeomSetPosition(convex, 0.1, 0.2, 0.45);
   std::vector<dContactGeom> out;
@@ -799,11 +803,9 @@ TEST(OdeGeom, ForgetTrimeshDataDropsTheCachedTree) {
 TEST(OdeGeom, ConvexRegistrationOfAPlainConvexGeom) {
   Space space;
   dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
-  static const dReal planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
-  static const dReal points[] = {0.5, 0.5, 0.5,  -0.5, 0.5, 0.5,  -0.5, -0.5, 0.5,  0.5, -0.5, 0.5,
-                                 0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
-  static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
-                                      4, 2, 6, 7, 3, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  const dReal* planes = kCubePlanes;
+  const dReal* points = kCubePoints;
+  const unsigned* polygons = kCubePolygons;
   dGeomID with_faces = dCreateConvex(space.id, planes, 6, points, 8, polygons);
   dGeomID points_only = dCreateConvex(space.id, planes, 6, points, 8, polygons);
   std::vector<dContactGeom> out;

@@ -65,6 +65,14 @@ inline bool contains(const Aabb& outer, const Aabb& inner, Real tolerance = 0) {
 // Aabb::empty() is not a valid query shape.
 inline bool is_valid(const Aabb& box) { return (box.min.array() <= box.max.array()).all(); }
 
+// A valid query box with infinite sides (a half-space, shapes.h) clipped to `bounds`, finite
+// bounds that hold the shape it is tested against: the same overlap answer, in finite arithmetic.
+// False when the clipped box is empty (no overlap).
+inline bool clip_infinite_sides(Aabb& query, const Aabb& bounds) {
+  query = {query.min.cwiseMax(bounds.min), query.max.cwiseMin(bounds.max)};
+  return is_valid(query) && query.min.allFinite() && query.max.allFinite();
+}
+
 inline bool overlaps(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
