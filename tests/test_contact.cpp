@@ -560,8 +560,12 @@ TEST(ContactReduce, MergesDuplicatesAndKeepsTheSpread) {
   duplicate.depth = 0.4;
   duplicate.position.x() += 1e-6;
   contacts.push_back(duplicate);
-  reduce_contacts(contacts, 5, 1e-3);
+  const std::size_t before = contacts.size();
+  const ReductionCounts counts = reduce_contacts(contacts, 5, 1e-3);
   ASSERT_EQ(contacts.size(), 5u);
+  // What went is reported: the near-duplicate merged, the rest dropped by the selection.
+  EXPECT_EQ(counts.merged, 1u);
+  EXPECT_EQ(counts.dropped, before - 1 - 5);
   EXPECT_EQ(contacts[0].depth, 0.5);
   for (std::size_t i = 1; i < contacts.size(); ++i) EXPECT_LE(contacts[i].depth, contacts[0].depth);
   // The four corners of the grid span the largest area.
@@ -578,7 +582,7 @@ TEST(ContactReduce, MergesDuplicatesAndKeepsTheSpread) {
   EXPECT_EQ(pair.size(), 2u);
   std::vector<ContactPoint> same(3);
   same[1].depth = 1;
-  reduce_contacts(same, 8, 1e-3);
+  EXPECT_EQ(reduce_contacts(same, 8, 1e-3).merged, 2u);
   ASSERT_EQ(same.size(), 1u);
   EXPECT_EQ(same[0].depth, 1);
   std::vector<ContactPoint> none;

@@ -220,8 +220,9 @@ Real added_area_2d(const Point2* hull, int h, const Point2& q) {
   return added;
 }
 
-// reduce_contacts on an array; returns the new count.
-int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance) {
+// reduce_contacts on an array; returns the new count (and, if asked, how many were merged away).
+int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance, int* merged = nullptr) {
+  if (merged) *merged = 0;
   if (count <= 0) return 0;
   std::sort(contacts, contacts + count, [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
   // Near-duplicates: same place and normals within ~10 degrees; the deeper one (earlier) stays.
@@ -236,6 +237,7 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
     }
     if (!duplicate) contacts[kept++] = contacts[i];
   }
+  if (merged) *merged = count - kept;
   if (kept <= max_count) return kept;
 
   // Keep the deepest, then greedily the point that makes the largest hull (in the plane across
@@ -1923,10 +1925,17 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
 
 // ---------------------------------------------------------------------------------------------
 
-void reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance) {
+ReductionCounts reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance) {
   // More than 64 contacts: the area-greedy selection looks at the deepest 64 (after merging).
   const int limit = static_cast<int>(std::clamp<std::size_t>(max_count, 1, 1 << 20));
-  contacts.resize(reduce_in_place(contacts.data(), static_cast<int>(contacts.size()), limit, merge_distance));
+  const std::size_t before = contacts.size();
+  int merged = 0;
+  contacts.resize(
+      std::size_t(reduce_in_place(contacts.data(), static_cast<int>(contacts.size()), limit, merge_distance, &merged)));
+  ReductionCounts counts;
+  counts.merged = std::size_t(merged);
+  counts.dropped = before - std::size_t(merged) - contacts.size();
+  return counts;
 }
 
 }  // namespace boxtree

@@ -155,7 +155,13 @@ int contact_triangle_faces(const Vec3& a0, const Vec3& a1, const Vec3& a2, const
 // Reduces a contact set the way a stable trimesh collider does: merges near-duplicates (positions
 // closer than `merge_distance` with normals within ~10 degrees: keeps the deeper one), then, if
 // more than `max_count` remain, keeps the deepest and then greedily the points that spread the
-// set the most (largest area). Order of the result: deepest first. max_count >= 1.
-void reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance);
+// set the most (largest area). Order of the result: deepest first. max_count >= 1 (0 is read as
+// 1). Returns how many contacts went: merged into a deeper near-duplicate, or dropped by the
+// selection (merged + dropped + the size after == the size before).
+struct ReductionCounts {
+  std::size_t merged = 0;
+  std::size_t dropped = 0;
+};
+ReductionCounts reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance);
 
 }  // namespace boxtree
