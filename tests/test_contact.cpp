@@ -563,9 +563,10 @@ TEST(ContactReduce, MergesDuplicatesAndKeepsTheSpread) {
   const std::size_t before = contacts.size();
   const ReductionCounts counts = reduce_contacts(contacts, 5, 1e-3);
   ASSERT_EQ(contacts.size(), 5u);
-  // What went is reported: the near-duplicate merged, the rest dropped by the selection.
-  EXPECT_EQ(counts.merged, 1u);
-  EXPECT_EQ(counts.dropped, before - 1 - 5);
+  // What went is reported: the near-duplicate and the grid point under the deepest contact
+  // merged into it, the rest dropped by the selection.
+  EXPECT_EQ(counts.merged, 2u);
+  EXPECT_EQ(counts.dropped, before - 2 - 5);
   EXPECT_EQ(contacts[0].depth, 0.5);
   for (std::size_t i = 1; i < contacts.size(); ++i) EXPECT_LE(contacts[i].depth, contacts[0].depth);
   // The four corners of the grid span the largest area.
