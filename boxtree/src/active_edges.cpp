@@ -29,7 +29,9 @@ Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).c
 
 }  // namespace
 
-std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real crease_degrees) {
+std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real crease_degrees,
+                                               std::size_t* inconsistent_edges) {
+  if (inconsistent_edges) *inconsistent_edges = 0;
   const std::vector<VertexId> id = weld_by_position(mesh);
   struct EdgeUse {
     VertexId lo, hi;
@@ -56,6 +58,10 @@ std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real cr
     if (j - i == 2) {
       const EdgeUse& e0 = uses[i];
       const EdgeUse& e1 = uses[i + 1];
+      // Consistently wound neighbours run along the shared edge in opposite directions; an
+      // inconsistent pair cannot be judged and stays active.
+      const bool consistent = id[mesh.triangles[e0.facet][e0.k]] != id[mesh.triangles[e1.facet][e1.k]];
+      if (!consistent && inconsistent_edges) ++*inconsistent_edges;
       const Vec3 n0 = face_normal(mesh.corner(e0.facet, 0), mesh.corner(e0.facet, 1), mesh.corner(e0.facet, 2));
       const Vec3 n1 = face_normal(mesh.corner(e1.facet, 0), mesh.corner(e1.facet, 1), mesh.corner(e1.facet, 2));
       const Real l0 = n0.norm(), l1 = n1.norm();
@@ -66,9 +72,6 @@ std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real cr
         const Real side = n0.dot(far1 - mesh.corner(e0.facet, e0.k)) / l0;
         const bool flat = n0.dot(n1) / (l0 * l1) >= cos_crease;
         const bool concave = side > 0;
-        // Consistently wound neighbours run along the shared edge in opposite directions; an
-        // inconsistent pair cannot be judged and stays active.
-        const bool consistent = id[mesh.triangles[e0.facet][e0.k]] != id[mesh.triangles[e1.facet][e1.k]];
         if (consistent && (flat || concave)) {
           active[e0.facet] &= static_cast<std::uint8_t>(~(1u << e0.k));
           active[e1.facet] &= static_cast<std::uint8_t>(~(1u << e1.k));

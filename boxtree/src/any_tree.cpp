@@ -92,14 +92,19 @@ void AnyTree::query_overlap(const Capsule& shape, FunctionRef<bool(FacetId)> vis
   if (impl_) impl_->query_overlap(shape, visit, stats, test);
 }
 
-void AnyTree::collide(const AnyTree& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> visit,
-                      QueryStats* stats, const CollideSettings& settings) const {
-  if (!impl_ || !b.impl_) return;
+bool AnyTree::can_collide(const AnyTree& b) const {
+  if (!impl_ || !b.impl_) return true;  // collide reports nothing
   const Concept& mine = *impl_;
   const Concept& theirs = *b.impl_;
   // Packed pie-slice trees share one type for the four pie kinds: their methods tell them apart.
   const bool other_pie_kind = packed_prism() != nullptr && method_.kind != b.method_.kind;
-  if (typeid(mine) != typeid(theirs) || other_pie_kind) {
+  return typeid(mine) == typeid(theirs) && !other_pie_kind;
+}
+
+void AnyTree::collide(const AnyTree& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> visit,
+                      QueryStats* stats, const CollideSettings& settings) const {
+  if (!impl_ || !b.impl_) return;
+  if (!can_collide(b)) {
     throw Error("boxtree::AnyTree::collide: the trees use different methods (" + method_name(method_) + " and " +
                 method_name(b.method_) + "); build both with the same method");
   }

@@ -16,8 +16,12 @@ namespace boxtree {
 // Per facet, bit k (k = 0, 1, 2) set when edge (corner k, corner k+1 mod 3) is active: a boundary
 // edge, an edge shared by more than two facets, or one between two facets that fold convexly by
 // more than `crease_degrees`. Flat and concave shared edges are inactive. Vertices are welded by
-// exact position, so triangle soups (STL) get their adjacency.
-std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real crease_degrees = 10);
+// exact position, so triangle soups (STL) get their adjacency. An edge shared by two facets that
+// run along it in the same direction (inconsistent winding: one of them faces the other way)
+// cannot be judged and stays active; `inconsistent_edges`, if given, receives how many there are
+// (0: every edge of two facets is wound consistently, so facet fronts are meaningful).
+std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real crease_degrees = 10,
+                                               std::size_t* inconsistent_edges = nullptr);
 
 enum class EdgeContact {
   keep,       // on the face, or on an active edge: unchanged

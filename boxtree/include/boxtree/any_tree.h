@@ -74,9 +74,16 @@ class AnyTree {
                      FacetTest test = FacetTest::exact_triangle) const;
   void query_overlap(const Capsule& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats = nullptr,
                      FacetTest test = FacetTest::exact_triangle) const;
-  // Both trees must be of the same method (throws boxtree::Error otherwise).
+  // Both trees must be of the same method (throws boxtree::Error otherwise; can_collide tells
+  // beforehand, and collider.h's collide_meshes converts instead).
   void collide(const AnyTree& b, const RigidTransform& a_from_b, FunctionRef<bool(const FacetPair&)> visit,
                QueryStats* stats = nullptr, const CollideSettings& settings = {}) const;
+
+  // Whether collide(b, ...) accepts b: both hold the same tree type (and, for packed pie-slice
+  // trees, the same pie kind).
+  bool can_collide(const AnyTree& b) const;
+  // Identifies the built tree: copies of one AnyTree share it (null for an empty tree).
+  const void* identity() const { return impl_.get(); }
 
   struct Concept;
   template <class TreeType>

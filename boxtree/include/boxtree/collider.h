@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+// The mesh collider: contacts between a CollisionMesh (collision_mesh.h) and a convex shape, or
+// between two meshes, through one pipeline that both engine adapters call:
+//   1. the tree query with the shape's tight volume grown by the margin (candidate facets);
+//   2. the per-facet narrowphase of contact.h (or the engine's own, for shapes it alone knows);
+//   3. one-sided facets: a contact pushing the shape out through a facet's back is turned to the
+//      front (the analytic routines do it themselves; for an engine narrowphase it is done here);
+//   4. internal edges (active_edges.h): contacts on flat or concave seams get the face normal;
+//   5. the contact set cut to the requested count (reduce_contacts), or, with early_stop, the
+//      first ones found.
+// Everything is in the mesh's frame: shapes are given in it and contacts come back in it, in
+// contact.h's conventions (position on the mesh's facet, normal from the facet towards the shape
+// or the other mesh, depth > 0 for penetration, `facet` = the mesh's facet). Engines convert.
+//
+// The functions do not throw and do not allocate once the result's vector has grown: the
+// physics step calls them. Invalid shapes (shapes.h's is_valid) or non-finite poses give no
+// contacts.
+#include <cstddef>
+#include <vector>
+
+#include "boxtree/collision_mesh.h"
+#include "boxtree/contact.h"
+#include "boxtree/convex_polyhedron.h"
+
+namespace boxtree {
+
+// What one call asks for.
+struct ContactRequest {
+  // Contacts also for shapes within this distance of a facet (depth >= -margin): speculative
+  // contacts, as engines keep them up to their breaking distance.
+  Real margin = 0;
+  // One-sided by default (ContactOptions::two_sided, contact.h): a shape is pushed out through a
+  // facet's front (counter-clockwise) side, never further in. A mesh whose winding is not
+  // consistent (CollisionMesh::consistent_winding) is treated as two-sided whatever is asked, and
+  // the result says so.
+  bool two_sided = false;
+  // Correct contacts on inactive edges to the face normal (active_edges.h).
+  bool internal_edges = true;
+  // At most this many contacts come back (>= 1), the deepest and the widest spread.
+  std::size_t max_contacts = 4;
+  // Contacts this close (with normals within ~10 degrees) are merged into the deeper one.
+  Real merge_distance = 0;
+  // Any max_contacts contacts will do (ODE's CONTACTS_UNIMPORTANT): the walk stops as soon as
+  // that many are found, and they are not reduced.
+  bool early_stop = false;
+};
+
+// What one call did.
+struct CollisionCounts {
+  std::size_t candidates = 0;       // facets (or facet pairs) the narrowphase ran on
+  std::size_t found = 0;            // contacts the narrowphase gave
+  std::size_t edge_corrected = 0;   // turned to the face normal on an inactive edge
+  std::size_t edge_discarded = 0;   // dropped on an inactive edge (the neighbour facet reports it)
+  std::size_t merged = 0;           // merged into a deeper near-duplicate by the reduction
+  std::size_t dropped = 0;          // left out by the reduction (or by early_stop)
+  bool two_sided_fallback = false;  // one-sided asked, but the mesh's winding is inconsistent
+  bool invalid_input = false;       // a non-finite pose or an invalid shape: nothing was done
+};
+
+struct ContactResult {
+  std::vector<ContactPoint> contacts;  // deepest first
+  CollisionCounts counts;
+  void clear() {
+    contacts.clear();
+    counts = {};
+  }
+};
+
+// ---- convex shapes (all in the mesh's frame) ----
+
+// A cylinder with axis p0-p1 and the given radius (contact_cylinder_triangle).
+struct Cylinder {
+  Vec3 p0 = Vec3::Zero();
+  Vec3 p1 = Vec3::UnitZ();
+  Real radius = 0;
+};
+
+// A convex polyhedron with faces (the exact separating-axis narrowphase, contact_polyhedron_triangle)
+// placed by `mesh_from_local`, grown by `rounding` (a sphere-swept hull, as Bullet's hulls with
+// their collision margin; the depth is the polyhedron's plus the rounding).
+struct PlacedPolyhedron {
+  const ConvexPolyhedron& local;
+  RigidTransform mesh_from_local;
+  Real rounding = 0;
+};
+
+// The convex hull of points placed by `mesh_from_local` (GJK/EPA, contact_convex_triangle).
+struct PlacedPoints {
+  const std::vector<Vec3>& local;
+  RigidTransform mesh_from_local;
+};
+
+// Any convex shape by its support mapping (mesh frame), with an interior point and an oriented
+// box that contains it (the query volume).
+struct SupportShape {
+  FunctionRef<Vec3(const Vec3& direction)> support;
+  Vec3 center = Vec3::Zero();
+  Obb bounds;
+  bool polytope = false;  // ConvexSupport::polytope
+};
+
+// An engine's own narrowphase for one triangle of the mesh (e.g. Bullet's GJK for its convex
+// shapes): writes at most kMaxEngineTriangleContacts contacts in contact.h's conventions and
+// returns how many. `options.two_sided` is always true here: step 3 applies the mesh's fronts.
+using TriangleNarrowphase =
+    FunctionRef<int(const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options, ContactPoint* out)>;
+constexpr int kMaxEngineTriangleContacts = 16;
+
+void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
+                    ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
+                    ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
+                    ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
+                    ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
+                    ContactResult& result);
+// The support shape through GJK/EPA (contact_convex_triangle), or through `narrowphase` when
+// given. Facets whose plane the shape lies wholly above or below by more than the margin are
+// skipped before the narrowphase (two support calls each).
+void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const ContactRequest& request,
+                    ContactResult& result);
+void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, TriangleNarrowphase narrowphase,
+                    const ContactRequest& request, ContactResult& result);
+
+// ---- mesh vs mesh ----
+
+// How a pair of intersecting facets becomes contacts.
+enum class MeshContactPolicy {
+  // contact_triangle_triangle: the least penetration of the two triangles (face or edge-edge
+  // axes), two-sided, internal edges corrected on both meshes.
+  triangle_pairs,
+  // contact_triangle_faces: face normals only (clipping, as GImpact); needs outward winding; the
+  // static mesh's faces resolve deep overlaps (MeshContactRequest::static_mesh).
+  face_normals,
+};
+
+// Which of the two meshes, if either, is a fixed surface (a static terrain).
+enum class StaticMesh { neither, mesh, other };
+
+struct MeshContactRequest : ContactRequest {
+  MeshContactPolicy policy = MeshContactPolicy::triangle_pairs;
+  StaticMesh static_mesh = StaticMesh::neither;
+};
+
+// Contacts between `mesh` and `other` placed by `mesh_from_other` (a rotation and translation;
+// a rotation that is not orthonormal to 1e-9 is made so). Positions are on `mesh`'s facets,
+// normals point from `mesh` towards `other`, `facet` is mesh's and `other_facet` other's. Meshes
+// of different methods are walked with a tree of one method built once and kept by the mesh
+// (CollisionMesh::tree_as): never an error. Facet pairs are always two-sided for triangle_pairs.
+void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const RigidTransform& mesh_from_other,
+                    const MeshContactRequest& request, ContactResult& result);
+
+}  // namespace boxtree

@@ -1,0 +1,395 @@
+// SPDX-License-Identifier: MIT
+#include "boxtree/collider.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "boxtree/active_edges.h"
+#include "internal.h"
+
+namespace boxtree {
+namespace {
+
+// Steps 1-5 of collider.h for one query volume: `per_facet(a, b, c, options, out)` is the
+// narrowphase for one triangle and returns how many contacts it wrote (at most `Capacity`).
+template <int Capacity, class Query, class PerFacet>
+void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test, const ContactRequest& request,
+                  const ContactOptions& options, ContactResult& result, PerFacet&& per_facet) {
+  const TriangleMesh& m = mesh.mesh();
+  const std::vector<std::uint8_t>& active = mesh.active_edges();
+  const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
+  ContactPoint found[Capacity];
+  mesh.tree().query_overlap(
+      query,
+      [&](FacetId facet) {
+        ++result.counts.candidates;
+        const Vec3& a = m.corner(facet, 0);
+        const Vec3& b = m.corner(facet, 1);
+        const Vec3& c = m.corner(facet, 2);
+        const int n = per_facet(a, b, c, options, found);
+        result.counts.found += std::size_t(n);
+        for (int i = 0; i < n; ++i) {
+          found[i].facet = facet;
+          if (request.internal_edges) {
+            const EdgeContact verdict = correct_internal_edge_contact(found[i], a, b, c, active[facet]);
+            if (verdict == EdgeContact::discard) {
+              ++result.counts.edge_discarded;
+              continue;  // beside this facet: its neighbour reports the real contact
+            }
+            if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
+          }
+          result.contacts.push_back(found[i]);
+        }
+        return !(request.early_stop && result.contacts.size() >= max_contacts);
+      },
+      nullptr, test);
+}
+
+// Step 5.
+void reduce(const ContactRequest& request, ContactResult& result) {
+  const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
+  if (request.early_stop) {
+    if (result.contacts.size() > max_contacts) {
+      result.counts.dropped += result.contacts.size() - max_contacts;
+      result.contacts.resize(max_contacts);
+    }
+    return;
+  }
+  const ReductionCounts counts = reduce_contacts(result.contacts, max_contacts, request.merge_distance);
+  result.counts.merged += counts.merged;
+  result.counts.dropped += counts.dropped;
+}
+
+// The options of the per-facet routines, with the mesh's fronts applied.
+ContactOptions options_for(const CollisionMesh& mesh, const ContactRequest& request, ContactResult& result) {
+  ContactOptions options;
+  options.margin = request.margin;
+  options.two_sided = request.two_sided || !mesh.consistent_winding();
+  result.counts.two_sided_fallback = !request.two_sided && !mesh.consistent_winding();
+  return options;
+}
+
+bool valid_request(const ContactRequest& request) { return request.margin >= 0 && request.merge_distance >= 0; }
+
+// A box around a segment p0-p1 grown by `radius` sideways and along it.
+Obb segment_box(const Vec3& p0, const Vec3& p1, Real radius_across, Real half_length_extra) {
+  Obb box;
+  const Vec3 axis = p1 - p0;
+  const Real length = axis.norm();
+  const Vec3 z = length > 0 ? Vec3(axis / length) : Vec3::UnitZ();
+  Vec3 x, y;
+  detail::orthonormal_completion(z, x, y);
+  box.center = (p0 + p1) * Real(0.5);
+  box.axes.col(0) = x;
+  box.axes.col(1) = y;
+  box.axes.col(2) = z;
+  box.half_extents = Vec3(radius_across, radius_across, length / 2 + half_length_extra);
+  return box;
+}
+
+// The oriented box of local points, placed, grown by `grow`.
+Obb placed_box(const std::vector<Vec3>& local, const RigidTransform& mesh_from_local, Real grow) {
+  Aabb box = Aabb::empty();
+  for (const Vec3& p : local) box.expand(p);
+  Obb placed;
+  placed.center = mesh_from_local.apply(box.center());
+  placed.axes = mesh_from_local.rotation;
+  placed.half_extents = (box.extent() * Real(0.5)).array() + grow;
+  return placed;
+}
+
+bool finite(const RigidTransform& t) { return t.rotation.allFinite() && t.translation.allFinite(); }
+
+// Step 3 for an engine narrowphase: a contact whose normal points behind a one-sided facet is
+// turned to the facet's front, at the depth the shape's deepest point along the front normal
+// lies behind the facet's plane; a shape wholly in front gives none.
+int apply_front(const SupportShape& shape, const Vec3& a, const Vec3& b, const Vec3& c, ContactPoint* out, int n) {
+  const Vec3 front_scaled = (b - a).cross(c - a);
+  const Real length = front_scaled.norm();
+  if (!(length > 0)) return n;  // degenerate: no front, two-sided
+  const Vec3 front = front_scaled / length;
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    if (out[i].normal.dot(front) >= 0) {
+      out[kept++] = out[i];
+      continue;
+    }
+    const Vec3 deepest = shape.support(-front);
+    const Real behind = (a - deepest).dot(front);
+    if (behind < 0) continue;  // apart along the front normal: no contact from this side
+    ContactPoint turned = out[i];
+    turned.position = deepest + front * behind;
+    turned.normal = front;
+    turned.depth = behind;
+    out[kept++] = turned;
+  }
+  return kept;
+}
+
+}  // namespace
+
+void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!is_valid(sphere) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  run_pipeline<kMaxSphereTriangleContacts>(
+      mesh, Sphere{sphere.center, sphere.radius + request.margin}, FacetTest::exact_triangle, request, options, result,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        return contact_sphere_triangle(sphere, a, b, c, o, out);
+      });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result) {
+  if (!is_valid(box) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  Obb query = box;
+  query.half_extents.array() += request.margin;
+  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
+                                        [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o,
+                                            ContactPoint* out) { return contact_box_triangle(box, a, b, c, o, out); });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!is_valid(capsule) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  run_pipeline<kMaxCapsuleTriangleContacts>(
+      mesh, Capsule{capsule.p0, capsule.p1, capsule.radius + request.margin}, FacetTest::exact_triangle, request,
+      options, result, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        return contact_capsule_triangle(capsule, a, b, c, o, out);
+      });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!cylinder.p0.allFinite() || !cylinder.p1.allFinite() || !(cylinder.radius >= 0) ||
+      !std::isfinite(cylinder.radius) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  const Obb query = segment_box(cylinder.p0, cylinder.p1, cylinder.radius + request.margin, request.margin);
+  run_pipeline<kMaxCylinderTriangleContacts>(
+      mesh, query, FacetTest::exact_triangle, request, options, result,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        return contact_cylinder_triangle(cylinder.p0, cylinder.p1, cylinder.radius, a, b, c, o, out);
+      });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!finite(hull.mesh_from_local) || !(hull.rounding >= 0) || !std::isfinite(hull.rounding) ||
+      !valid_request(request) || hull.local.vertices.empty()) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  ContactOptions options = options_for(mesh, request, result);
+  options.margin += hull.rounding;
+  // Moved into the mesh's frame once per call, into per-thread storage (no allocation once warm).
+  thread_local ConvexPolyhedron placed;
+  transform_polyhedron(hull.local, hull.mesh_from_local, placed);
+  // The query stops at the leaf boxes: the narrowphase's first axes (the triangle's normal, the
+  // hull's faces at three dot products each) reject what the box's exact triangle test would,
+  // and the box is looser than the hull anyway.
+  const Obb query = placed_box(hull.local.vertices, hull.mesh_from_local, hull.rounding + request.margin);
+  run_pipeline<kMaxPolyhedronTriangleContacts>(
+      mesh, query, FacetTest::leaf_volume, request, options, result,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        const int n = contact_polyhedron_triangle(placed, a, b, c, o, out);
+        for (int i = 0; i < n; ++i) out[i].depth += hull.rounding;
+        return n;
+      });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!finite(hull.mesh_from_local) || !valid_request(request) || hull.local.empty()) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  thread_local std::vector<Vec3> points;
+  points.resize(hull.local.size());
+  Vec3 centroid = Vec3::Zero();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    points[i] = hull.mesh_from_local.apply(hull.local[i]);
+    centroid += points[i];
+  }
+  centroid /= Real(points.size());
+  if (!centroid.allFinite()) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  auto support = [&](const Vec3& direction) { return support_points(points, direction); };
+  const ConvexSupport shape{support, centroid, true};
+  run_pipeline<kMaxConvexTriangleContacts>(
+      mesh, placed_box(hull.local, hull.mesh_from_local, request.margin), FacetTest::exact_triangle, request, options,
+      result, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        return contact_convex_triangle(shape, a, b, c, o, out);
+      });
+  reduce(request, result);
+}
+
+namespace {
+
+// The support shape's extent along a facet's normal: true when the shape lies wholly above or
+// below the facet's plane by more than `reach` (then no contact can come from it).
+bool out_of_reach(const SupportShape& shape, const Vec3& a, const Vec3& b, const Vec3& c, Real reach) {
+  const Vec3 normal = (b - a).cross(c - a);
+  const Real length = normal.norm();
+  if (!(length > 0)) return false;
+  const Vec3 n = normal / length;
+  const Real plane = n.dot(a);
+  if (n.dot(shape.support(-n)) - plane > reach) return true;
+  return plane - n.dot(shape.support(n)) > reach;
+}
+
+bool valid_support(const SupportShape& shape, const ContactRequest& request) {
+  return shape.center.allFinite() && is_valid(shape.bounds) && valid_request(request);
+}
+
+}  // namespace
+
+void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const ContactRequest& request,
+                    ContactResult& result) {
+  if (!valid_support(shape, request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  Obb query = shape.bounds;
+  query.half_extents.array() += request.margin;
+  const ConvexSupport convex{shape.support, shape.center, shape.polytope};
+  run_pipeline<kMaxConvexTriangleContacts>(
+      mesh, query, FacetTest::exact_triangle, request, options, result,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        if (out_of_reach(shape, a, b, c, o.margin)) return 0;
+        return contact_convex_triangle(convex, a, b, c, o, out);
+      });
+  reduce(request, result);
+}
+
+void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, TriangleNarrowphase narrowphase,
+                    const ContactRequest& request, ContactResult& result) {
+  if (!valid_support(shape, request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const ContactOptions options = options_for(mesh, request, result);
+  ContactOptions engine_options = options;
+  engine_options.two_sided = true;
+  Obb query = shape.bounds;
+  query.half_extents.array() += request.margin;
+  run_pipeline<kMaxEngineTriangleContacts>(
+      mesh, query, FacetTest::exact_triangle, request, options, result,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        if (out_of_reach(shape, a, b, c, o.margin)) return 0;
+        const int n = std::min(narrowphase(a, b, c, engine_options, out), kMaxEngineTriangleContacts);
+        return o.two_sided ? n : apply_front(shape, a, b, c, out, n);
+      });
+  reduce(request, result);
+}
+
+void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const RigidTransform& mesh_from_other,
+                    const MeshContactRequest& request, ContactResult& result) {
+  if (!finite(mesh_from_other) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  RigidTransform pose = mesh_from_other;
+  if (!is_rotation(pose.rotation)) {
+    // Engines' rotations drift from orthonormal (single-precision Bullet: ~1e-7); the walk needs
+    // a rotation, so take the nearest one through its quaternion.
+    Eigen::Quaternion<Real> q(pose.rotation);
+    if (!(q.norm() > 0)) {
+      result.counts.invalid_input = true;
+      return;
+    }
+    pose.rotation = q.normalized().toRotationMatrix();
+  }
+  // Tree-vs-tree needs one volume kind: convert the other's tree (once, kept by that mesh), or
+  // both to the packed aabb form when the other cannot be converted to this tree's form.
+  const AnyTree* mine = &mesh.tree();
+  const AnyTree* theirs = &other.tree();
+  if (!mine->can_collide(*theirs)) {
+    theirs = &other.tree_as(mesh.method());
+    if (!mine->can_collide(*theirs)) {
+      mine = &mesh.tree_as(Method{});
+      theirs = &other.tree_as(Method{});
+    }
+  }
+
+  ContactOptions options;
+  options.margin = request.margin;
+  options.two_sided = true;
+  const FixedSurface fixed = request.static_mesh == StaticMesh::other  ? FixedSurface::a
+                             : request.static_mesh == StaticMesh::mesh ? FixedSurface::b
+                                                                       : FixedSurface::neither;
+  const TriangleMesh& m = mesh.mesh();
+  const TriangleMesh& o = other.mesh();
+  const std::vector<std::uint8_t>& my_edges = mesh.active_edges();
+  const std::vector<std::uint8_t>& their_edges = other.active_edges();
+  const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
+  ContactPoint found[std::max(kMaxTriangleTriangleContacts, kMaxTriangleFaceContacts)];
+  mine->collide(*theirs, pose, [&](const FacetPair& pair) {
+    ++result.counts.candidates;
+    // Triangle a of the routines is the other's, b is mine: normals from mine towards the other,
+    // positions on mine.
+    const Vec3 a0 = pose.apply(o.corner(pair.b, 0));
+    const Vec3 a1 = pose.apply(o.corner(pair.b, 1));
+    const Vec3 a2 = pose.apply(o.corner(pair.b, 2));
+    const Vec3& b0 = m.corner(pair.a, 0);
+    const Vec3& b1 = m.corner(pair.a, 1);
+    const Vec3& b2 = m.corner(pair.a, 2);
+    const bool faces = request.policy == MeshContactPolicy::face_normals;
+    const int n = faces ? contact_triangle_faces(a0, a1, a2, b0, b1, b2, options, found, fixed)
+                        : contact_triangle_triangle(a0, a1, a2, b0, b1, b2, options, found);
+    result.counts.found += std::size_t(n);
+    for (int i = 0; i < n; ++i) {
+      ContactPoint& c = found[i];
+      c.facet = pair.a;
+      c.other_facet = pair.b;
+      // Face normals need no edge correction; the least-penetration axis does, on my side (the
+      // position is on my triangle), then on the other's: seen from its triangle the same
+      // contact sits at the deepest point of mine with the opposite normal.
+      if (request.internal_edges && !faces) {
+        EdgeContact verdict = correct_internal_edge_contact(c, b0, b1, b2, my_edges[pair.a]);
+        if (verdict == EdgeContact::keep) {
+          ContactPoint flipped = c;
+          flipped.position = c.point_on_shape();
+          flipped.normal = -c.normal;
+          verdict = correct_internal_edge_contact(flipped, a0, a1, a2, their_edges[pair.b]);
+          if (verdict == EdgeContact::corrected) {
+            c.normal = -flipped.normal;
+            c.depth = flipped.depth;
+            c.position = flipped.point_on_shape();
+          }
+        }
+        if (verdict == EdgeContact::discard) {
+          ++result.counts.edge_discarded;
+          continue;
+        }
+        if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
+      }
+      result.contacts.push_back(c);
+    }
+    return !(request.early_stop && result.contacts.size() >= max_contacts);
+  });
+  reduce(request, result);
+}
+
+}  // namespace boxtree
