@@ -304,6 +304,65 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
   reduce(request, result);
 }
 
+void collide_half_space(const CollisionMesh& mesh, const Plane& plane, const ContactRequest& request,
+                        ContactResult& result) {
+  if (!is_valid(plane) || !valid_request(request)) {
+    result.counts.invalid_input = true;
+    return;
+  }
+  const Real length = plane.normal.norm();
+  const Vec3 n = plane.normal / length;
+  const Real offset = plane.offset / length;
+  const Real margin = request.margin;
+  const Aabb& bounds = mesh.bounds();
+  const Vec3 center = bounds.center();
+  const Real radius = bounds.extent().norm() * Real(0.5);
+  const Real center_height = n.dot(center) - offset;
+  if (center_height - radius > margin) return;  // the whole mesh is above the plane
+  // The part of the bounds' sphere that can hold vertices below the plane: heights [lo, hi]
+  // relative to it, as an oriented box along the normal.
+  const Real lo = center_height - radius;
+  const Real hi = std::min(margin, center_height + radius);
+  Obb query;
+  const Vec3 u = n.unitOrthogonal();
+  query.axes.col(0) = u;
+  query.axes.col(1) = n.cross(u);
+  query.axes.col(2) = n;
+  query.center = center + n * ((lo + hi) * Real(0.5) - center_height);
+  query.half_extents = Vec3(radius, radius, (hi - lo) * Real(0.5));
+
+  const TriangleMesh& m = mesh.mesh();
+  thread_local std::vector<unsigned char> seen;  // vertex visited (shared by several facets)
+  thread_local std::vector<VertexId> touched;
+  if (seen.size() < m.vertices.size()) seen.assign(m.vertices.size(), 0);
+  touched.clear();
+  const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
+  mesh.tree().query_overlap(
+      query,
+      [&](FacetId facet) {
+        ++result.counts.candidates;
+        for (int k = 0; k < 3; ++k) {
+          const VertexId v = m.triangles[facet][k];
+          if (seen[v]) continue;
+          seen[v] = 1;
+          touched.push_back(v);
+          const Real height = n.dot(m.vertices[v]) - offset;
+          if (height > margin) continue;
+          ContactPoint c;
+          c.position = m.vertices[v];
+          c.normal = -n;
+          c.depth = -height;
+          c.facet = facet;
+          ++result.counts.found;
+          result.contacts.push_back(c);
+        }
+        return !(request.early_stop && result.contacts.size() >= max_contacts);
+      },
+      nullptr, FacetTest::leaf_volume);
+  for (VertexId v : touched) seen[v] = 0;
+  reduce(request, result);
+}
+
 void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const RigidTransform& mesh_from_other,
                     const MeshContactRequest& request, ContactResult& result) {
   if (!finite(mesh_from_other) || !valid_request(request)) {

@@ -204,5 +204,57 @@ TEST(OdeDrop, ClosedMeshComesToRest) {
   }
 }
 
+// Hulls made with plain dCreateConvex, never registered with boxtree (a user who missed the README
+// line), dropped onto the boxtree terrain: they land and rest on it like registered ones (their
+// points are read through ODE), and the geom's counter says that it happened.
+TEST(OdeDrop, UnregisteredHullsRestOnTheTerrain) {
+  static const dReal planes[] = {1, 0, 0, 0.3, -1, 0, 0, 0.3, 0, 1, 0, 0.3, 0, -1, 0, 0.3, 0, 0, 1, 0.3, 0, 0, -1, 0.3};
+  static const dReal points[] = {0.3, 0.3, 0.3,  -0.3, 0.3, 0.3,  -0.3, -0.3, 0.3,  0.3, -0.3, 0.3,
+                                 0.3, 0.3, -0.3, -0.3, 0.3, -0.3, -0.3, -0.3, -0.3, 0.3, -0.3, -0.3};
+  static const unsigned polygons[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1,
+                                      4, 3, 2, 6, 7, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+  const AnyTree reference = AnyTree::build(scene_terrain(), parse_method("aabb"));
+  DropWorld world(Ground::boxtree, {});
+  std::vector<dGeomID> hulls;
+  for (int i = 0; i < 16; ++i) {
+    const Real x = 8 + 7 * (i % 4), y = 8 + 7 * (i / 4);
+    dBodyID body = dBodyCreate(world.world());
+    dMass mass;
+    dMassSetBox(&mass, 500, 0.6, 0.6, 0.6);
+    dBodySetMass(body, &mass);
+    dBodySetPosition(body, x, y, terrain_height(reference, x, y) + 1.5);
+    dMatrix3 r;
+    dRFromEulerAngles(r, 0.3 * i, 0.2 * i, 0.1 * i);
+    dBodySetRotation(body, r);
+    dGeomID hull = dCreateConvex(world.space(), planes, 6, points, 8, polygons);
+    dGeomSetBody(hull, body);
+    hulls.push_back(hull);
+  }
+  for (int step = 0; step < 300; ++step) world.step();
+  Real deepest = -1e9;
+  for (dGeomID hull : hulls) {
+    const dReal* p = dGeomGetPosition(hull);
+    const dReal* r = dGeomGetRotation(hull);
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 local(points[3 * k], points[3 * k + 1], points[3 * k + 2]);
+      Vec3 world_point(p[0], p[1], p[2]);
+      for (int row = 0; row < 3; ++row)
+        for (int col = 0; col < 3; ++col) world_point[row] += r[row * 4 + col] * local[col];
+      deepest = std::max(deepest, terrain_height(reference, world_point.x(), world_point.y()) - world_point.z());
+    }
+  }
+  const auto counters = boxtree::ode::geom_counters(world.ground());
+  std::printf("[ hulls    ] unregistered: deepest corner %.4f m below the terrain, %llu calls read through ODE\n",
+              deepest, static_cast<unsigned long long>(counters.convexes_read_from_ode));
+  // Before the points were read through ODE, every one of them fell through (0 contacts).
+  EXPECT_LT(deepest, 0.05);
+  EXPECT_GT(counters.convexes_read_from_ode, 0u);
+  EXPECT_EQ(counters.convexes_without_data, 0u);
+  for (dGeomID hull : hulls) {
+    boxtree::ode::forget_convex(hull);
+    dGeomDestroy(hull);
+  }
+}
+
 }  // namespace
 }  // namespace boxtree::ode_test

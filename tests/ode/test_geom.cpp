@@ -499,10 +499,13 @@ TEST(OdeGeom, ConvexWithRegisteredPoints) {
   for (const dContactGeom& g : out) EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-6);
   dGeomSetPosition(convex, 0.1, 0.2, 0.55);
   EXPECT_EQ(collide(mesh, convex, out, 8), 0);
-  // Forgotten (or never registered): no contacts, and no crash.
+  // Forgotten (or never registered): its points are read through ODE, GJK/EPA as above.
   boxtree::ode::forget_convex(convex);
   dGeomSetPosition(convex, 0.1, 0.2, 0.45);
-  EXPECT_EQ(collide(mesh, convex, out, 8), 0);
+  boxtree::ode::reset_geom_counters(mesh);
+  ASSERT_GE(collide(mesh, convex, out, 8), 1);
+  EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
+  EXPECT_EQ(boxtree::ode::geom_counters(mesh).convexes_read_from_ode, 1u);
 }
 
 // Convex data that is not a closed convex polyhedron with matching planes is refused with the
@@ -798,8 +801,9 @@ TEST(OdeGeom, ForgetTrimeshDataDropsTheCachedTree) {
   EXPECT_GE(collide(cube, ground.geom, out, 16), 1);
 }
 
-// set_convex and set_convex_points on a geom made with dCreateConvex: nothing before, contacts
-// after (a patch with the faces, GJK points without).
+// A geom made with dCreateConvex and never registered collides all the same: its points are read
+// through ODE (GJK/EPA on their hull, the same depth), the counter says so; set_convex then gives
+// the face patch, set_convex_points GJK on the given points.
 TEST(OdeGeom, ConvexRegistrationOfAPlainConvexGeom) {
   Space space;
   dGeomID mesh = dCreateBoxtreeMesh(space.id, flat_grid(10, 5), "aabb");
@@ -811,18 +815,25 @@ TEST(OdeGeom, ConvexRegistrationOfAPlainConvexGeom) {
   std::vector<dContactGeom> out;
   for (dGeomID c : {with_faces, points_only}) {
     dGeomSetPosition(c, 0.1, 0.2, 0.45);
-    EXPECT_EQ(collide(mesh, c, out, 8), 0);  // not registered
+    // Turned, so that the points come back in the convex's frame and not by luck.
+    dMatrix3 r;
+    dRFromAxisAndAngle(r, 0, 0, 1, 0.3);
+    dGeomSetRotation(c, r);
+    ASSERT_GE(collide(mesh, c, out, 8), 1);  // not registered: read through ODE
+    EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
+    for (const dContactGeom& g : out) EXPECT_LT((normal_of(g) - Vec3(0, 0, -1)).norm(), 1e-6);
   }
+  EXPECT_EQ(boxtree::ode::geom_counters(mesh).convexes_read_from_ode, 2u);
+  EXPECT_EQ(boxtree::ode::geom_counters(mesh).convexes_without_data, 0u);
   boxtree::ode::set_convex(with_faces, planes, 6, points, 8, polygons);
   ASSERT_GE(collide(mesh, with_faces, out, 8), 4);
   for (const dContactGeom& g : out) EXPECT_NEAR(g.depth, 0.05, 1e-9);
   boxtree::ode::set_convex_points(points_only, points, 8);
   ASSERT_GE(collide(mesh, points_only, out, 8), 1);
   EXPECT_NEAR(deepest(out).depth, 0.05, 1e-6);
-  EXPECT_THROW(boxtree::ode::set_convex_points(mesh, points, 8), Error);  // not a dConvex
+  EXPECT_EQ(boxtree::ode::geom_counters(mesh).convexes_read_from_ode, 2u);  // registered now
+  EXPECT_THROW(boxtree::ode::set_convex_points(mesh, points, 8), Error);    // not a dConvex
   for (dGeomID c : {with_faces, points_only}) boxtree::ode::forget_convex(c);
-  EXPECT_EQ(collide(mesh, with_faces, out, 8), 0);
-  EXPECT_EQ(collide(mesh, points_only, out, 8), 0);
 }
 
 // ODE's registration does not survive dCloseODE: close, re-init, register again, collide.

@@ -126,6 +126,13 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const 
 void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, TriangleNarrowphase narrowphase,
                     const ContactRequest& request, ContactResult& result);
 
+// The half-space below `plane` ({x : normal . x <= offset}, ODE's and Bullet's static planes):
+// a contact at every mesh vertex within the margin of it or below it (as ODE's trimesh-plane
+// collider), normal -normal/|normal| (from the mesh into the half-space), depth the vertex's
+// distance below the plane; then reduced. The tree prunes to the facets that reach below.
+void collide_half_space(const CollisionMesh& mesh, const Plane& plane, const ContactRequest& request,
+                        ContactResult& result);
+
 // ---- mesh vs mesh ----
 
 // How a pair of intersecting facets becomes contacts.

@@ -1,15 +1,16 @@
 // SPDX-License-Identifier: MIT
 // The boxtree geom class: registration with ODE, creation, the world AABB, and the registries the
 // colliders read (convex points, trees of ODE trimeshes).
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <set>
 #include <string>
 #include <tuple>
 #include <unordered_map>
 
-#include "boxtree/active_edges.h"
 #include "boxtree/error.h"
 #include "boxtree/volume/aabb.h"
 #include "boxtree/volume/obb.h"
@@ -30,8 +31,9 @@ GeomObject*& slot_of(dGeomID geom) { return *static_cast<GeomObject**>(dGeomGetC
 void class_aabb(dGeomID geom, dReal aabb[6]) {
   const GeomObject* object = slot_of(geom);
   const RigidTransform pose = pose_of(geom);
-  const Vec3 center = pose.apply(object->local_bounds.center());
-  const Vec3 half = pose.rotation.cwiseAbs() * (object->local_bounds.extent() * Real(0.5));
+  const Aabb& bounds = object->mesh->bounds();
+  const Vec3 center = pose.apply(bounds.center());
+  const Vec3 half = pose.rotation.cwiseAbs() * (bounds.extent() * Real(0.5));
   // The speculative margin widens the box so that spaces pair shapes within it too.
   const Vec3 widen = half + Vec3::Constant(object->settings.margin);
   for (int i = 0; i < 3; ++i) {
@@ -54,7 +56,7 @@ int class_aabb_test(dGeomID self, dGeomID /*other*/, dReal aabb[6]) {
   box.center = mesh_from_world.apply((lo + hi) * Real(0.5));
   box.axes = mesh_from_world.rotation;
   box.half_extents = (hi - lo) * Real(0.5) + Vec3::Constant(object->settings.margin);
-  return overlaps(object->local_bounds, box) ? 1 : 0;
+  return overlaps(object->mesh->bounds(), box) ? 1 : 0;
 }
 
 void class_dtor(dGeomID geom) {
@@ -65,12 +67,27 @@ void class_dtor(dGeomID geom) {
 
 dColliderFn* class_collider(int other_class) { return collider_for(other_class); }
 
-dGeomID create_geom(dSpaceID space, AnyTree tree) {
-  if (tree.empty()) throw Error("dCreateBoxtreeMesh: the tree is empty");
+// One message per mesh, the first time a geom is made from it, through ODE's message handler.
+void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
+  if (mesh.consistent_winding()) return;
+  static std::mutex mutex;
+  static std::set<const void*> warned;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!warned.insert(mesh.tree().identity()).second) return;
+  }
+  dMessage(0,
+           "boxtree: a mesh of %zu facets has %zu edges whose two facets are wound the same way, so its facets "
+           "have no consistent front; its geoms collide two-sided (GeomSettings::two_sided). Wind every facet "
+           "counter-clockwise seen from outside to make them one-sided.",
+           mesh.mesh().facet_count(), mesh.inconsistent_edges());
+}
+
+dGeomID create_geom(dSpaceID space, std::shared_ptr<const CollisionMesh> mesh) {
+  if (!mesh) throw Error("dCreateBoxtreeMesh: no collision mesh");
+  warn_once_if_inconsistently_wound(*mesh);
   auto object = std::make_unique<GeomObject>();
-  object->local_bounds = tree.bounds();
-  object->active_edges = compute_active_edges(tree.mesh());
-  object->tree = std::move(tree);
+  object->mesh = std::move(mesh);
   const int class_number = dBoxtreeInit();
   dGeomID geom = dCreateGeom(class_number);
   slot_of(geom) = object.release();
@@ -107,9 +124,13 @@ std::mutex g_convex_mutex;
 std::unordered_map<dGeomID, std::shared_ptr<const ConvexEntry>> g_convex_entries;
 
 // ---- ODE trimesh trees ----
+struct TrimeshEntry {
+  std::shared_ptr<const CollisionMesh> mesh;
+  int triangle_count = 0;
+};
 using TrimeshKey = std::tuple<dTriMeshDataID, int /*kind*/, int /*hybrid level*/>;
 std::mutex g_trimesh_mutex;
-std::map<TrimeshKey, std::shared_ptr<const TrimeshTree>> g_trimesh_trees;
+std::map<TrimeshKey, TrimeshEntry> g_trimesh_meshes;
 
 // Triangle i of an ODE trimesh in the trimesh's own frame.
 void trimesh_triangle(dGeomID trimesh, int i, const RigidTransform& local_from_world, Vec3 out[3]) {
@@ -118,12 +139,12 @@ void trimesh_triangle(dGeomID trimesh, int i, const RigidTransform& local_from_w
   for (int k = 0; k < 3; ++k) out[k] = local_from_world.apply(Vec3(v[k][0], v[k][1], v[k][2]));
 }
 
-// The cached tree still describes this trimesh: same count, and the first, middle and last
+// The cached mesh still describes this trimesh: same count, and the first, middle and last
 // triangles agree (catches data replaced in place or a freed data id reused).
-bool trimesh_entry_matches(const TrimeshTree& entry, dGeomID trimesh, const RigidTransform& local_from_world) {
+bool trimesh_entry_matches(const TrimeshEntry& entry, dGeomID trimesh, const RigidTransform& local_from_world) {
   const int count = dGeomTriMeshGetTriangleCount(trimesh);
   if (count != entry.triangle_count || count == 0) return false;
-  const TriangleMesh& mesh = entry.tree.mesh();
+  const TriangleMesh& mesh = entry.mesh->mesh();
   const Real scale = 1 + mesh.vertices.front().cwiseAbs().maxCoeff();
   for (int i : {0, count / 2, count - 1}) {
     Vec3 corners[3];
@@ -132,6 +153,39 @@ bool trimesh_entry_matches(const TrimeshTree& entry, dGeomID trimesh, const Rigi
       if ((corners[k] - mesh.corner(FacetId(i), k)).cwiseAbs().maxCoeff() > 1e-6 * scale) return false;
   }
   return true;
+}
+
+// A convex geom's points, read through ODE's public API: ODE has no getter for a dConvex's data,
+// but its convex-plane collider reports every point on or below a plane (as long as some point is
+// on or above it). Two planes through the middle of the geom's AABB, facing opposite ways, give
+// every point between them; the points come back in world coordinates, turned into the convex's
+// frame here. Empty if ODE gives none (a convex of no points, or all on one side: flat).
+std::vector<Vec3> read_convex_points(dGeomID convex) {
+  dReal box[6];
+  dGeomGetAABB(convex, box);
+  const Vec3 middle((box[0] + box[1]) / 2, (box[2] + box[3]) / 2, (box[4] + box[5]) / 2);
+  const RigidTransform local_from_world = pose_of(convex).inverse();
+  std::vector<Vec3> points;
+  std::vector<dContactGeom> found;
+  for (const Real side : {Real(1), Real(-1)}) {
+    dGeomID plane = dCreatePlane(nullptr, 0, 0, side, side * middle.z());
+    for (int capacity = 256;; capacity *= 4) {
+      found.resize(std::size_t(capacity));
+      const int n = dCollide(convex, plane, std::min(capacity, kContactCountMask), found.data(), sizeof(dContactGeom));
+      if (n < capacity || capacity >= kContactCountMask) {
+        for (int i = 0; i < n; ++i)
+          points.push_back(local_from_world.apply(Vec3(found[i].pos[0], found[i].pos[1], found[i].pos[2])));
+        break;
+      }
+    }
+    dGeomDestroy(plane);
+  }
+  // Points on the middle plane come from both calls.
+  std::sort(points.begin(), points.end(), [](const Vec3& a, const Vec3& b) {
+    return std::make_tuple(a.x(), a.y(), a.z()) < std::make_tuple(b.x(), b.y(), b.z());
+  });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  return points;
 }
 
 }  // namespace
@@ -151,37 +205,61 @@ RigidTransform pose_of(dGeomID geom) {
   return pose;
 }
 
-std::shared_ptr<const ConvexEntry> convex_entry(dGeomID convex) {
-  std::shared_ptr<const ConvexEntry> entry;
-  {
-    std::lock_guard<std::mutex> lock(g_convex_mutex);
-    auto it = g_convex_entries.find(convex);
-    if (it == g_convex_entries.end()) return nullptr;
-    entry = it->second;
-  }
-  // ODE's AABB of a convex is exactly the box of its turned points (dxConvex::computeAABB), so
-  // ours must agree with it; a mismatch means the entry belongs to another (destroyed) geom.
+namespace {
+
+// The entry matches ODE's AABB of the geom: ODE's AABB of a convex is exactly the box of its
+// turned points (dxConvex::computeAABB); a mismatch means the entry belongs to another
+// (destroyed) geom, or the data changed since.
+bool entry_matches(const ConvexEntry& entry, dGeomID convex) {
   dReal ode_box[6];
   dGeomGetAABB(convex, ode_box);
   const RigidTransform pose = pose_of(convex);
   Aabb box = Aabb::empty();
-  for (const Vec3& p : entry->points) box.expand(pose.apply(p));
+  for (const Vec3& p : entry.points) box.expand(pose.apply(p));
   const Real tolerance = 1e-7 * (1 + box.max.cwiseAbs().maxCoeff() + box.min.cwiseAbs().maxCoeff());
   for (int i = 0; i < 3; ++i) {
     if (std::abs(box.min[i] - ode_box[2 * i]) > tolerance || std::abs(box.max[i] - ode_box[2 * i + 1]) > tolerance)
-      return nullptr;
+      return false;
   }
+  return true;
+}
+
+}  // namespace
+
+std::shared_ptr<const ConvexEntry> convex_entry(dGeomID convex) {
+  {
+    std::lock_guard<std::mutex> lock(g_convex_mutex);
+    auto it = g_convex_entries.find(convex);
+    if (it != g_convex_entries.end() && entry_matches(*it->second, convex)) return it->second;
+  }
+  // Nobody registered this convex (or its registration is stale): read its points through ODE,
+  // once, and keep them as a points-only registration (GJK/EPA on the hull).
+  auto entry = std::make_shared<ConvexEntry>();
+  entry->points = read_convex_points(convex);
+  entry->read_from_ode = true;
+  if (entry->points.empty() || !entry_matches(*entry, convex)) return nullptr;
+  static std::atomic<bool> told{false};
+  if (!told.exchange(true)) {
+    dMessage(0,
+             "boxtree: a dConvex geom that was not registered with boxtree collided with a boxtree mesh; its "
+             "points were read through ODE and it collides by GJK/EPA on them. Create convexes with "
+             "boxtree::ode::create_convex (or call boxtree::ode::set_convex after dCreateConvex) for the exact "
+             "face contacts. (Said once per process.)");
+  }
+  std::lock_guard<std::mutex> lock(g_convex_mutex);
+  g_convex_entries[convex] = entry;
   return entry;
 }
 
-std::shared_ptr<const TrimeshTree> trimesh_tree(dGeomID trimesh, const Method& method) {
+std::shared_ptr<const CollisionMesh> trimesh_mesh(dGeomID trimesh, const Method& method) {
   const dTriMeshDataID data = dGeomTriMeshGetData(trimesh);
   const RigidTransform local_from_world = pose_of(trimesh).inverse();
   const TrimeshKey key{data, int(method.kind), method.hybrid_level};
   {
     std::lock_guard<std::mutex> lock(g_trimesh_mutex);
-    auto it = g_trimesh_trees.find(key);
-    if (it != g_trimesh_trees.end() && trimesh_entry_matches(*it->second, trimesh, local_from_world)) return it->second;
+    auto it = g_trimesh_meshes.find(key);
+    if (it != g_trimesh_meshes.end() && trimesh_entry_matches(it->second, trimesh, local_from_world))
+      return it->second.mesh;
   }
   const int count = dGeomTriMeshGetTriangleCount(trimesh);
   if (count <= 0) return nullptr;
@@ -196,18 +274,16 @@ std::shared_ptr<const TrimeshTree> trimesh_tree(dGeomID trimesh, const Method& m
     for (const Vec3& c : corners) mesh->vertices.push_back(c);
     mesh->triangles.push_back({base, base + 1, base + 2});
   }
-  auto entry = std::make_shared<TrimeshTree>();
+  TrimeshEntry entry;
   try {
-    entry->tree = AnyTree::build(std::move(mesh), method);
+    entry.mesh = CollisionMesh::build(std::move(mesh), method);
   } catch (const Error&) {
     return nullptr;  // e.g. NaN vertices: ODE would not collide such a mesh sensibly either
   }
-  entry->bounds = entry->tree.bounds();
-  entry->active_edges = compute_active_edges(entry->tree.mesh());
-  entry->triangle_count = count;
+  entry.triangle_count = count;
   std::lock_guard<std::mutex> lock(g_trimesh_mutex);
-  g_trimesh_trees[key] = entry;
-  return entry;
+  g_trimesh_meshes[key] = entry;
+  return entry.mesh;
 }
 
 }  // namespace boxtree::ode::detail
@@ -238,11 +314,16 @@ int dBoxtreeGetClass() { return g_class.load(); }
 dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::TriangleMesh> mesh, const char* method) {
   if (!mesh) throw boxtree::Error("dCreateBoxtreeMesh: no mesh");
   const boxtree::Method parsed = boxtree::parse_method(method ? method : "aabb");
-  return boxtree::ode::detail::create_geom(space, boxtree::AnyTree::build(std::move(mesh), parsed));
+  return boxtree::ode::detail::create_geom(space, boxtree::CollisionMesh::build(std::move(mesh), parsed));
 }
 
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const boxtree::AnyTree& tree) {
-  return boxtree::ode::detail::create_geom(space, tree);
+  if (tree.empty()) throw boxtree::Error("dCreateBoxtreeMesh: the tree is empty");
+  return boxtree::ode::detail::create_geom(space, boxtree::CollisionMesh::of(tree));
+}
+
+dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::CollisionMesh> mesh) {
+  return boxtree::ode::detail::create_geom(space, std::move(mesh));
 }
 
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const double* vertices, int vertex_stride, int vertex_count,
@@ -267,7 +348,12 @@ bool is_boxtree_geom(dGeomID geom) { return detail::object_of(geom) != nullptr; 
 
 const AnyTree* geom_tree(dGeomID geom) {
   const detail::GeomObject* object = detail::object_of(geom);
-  return object ? &object->tree : nullptr;
+  return object ? &object->mesh->tree() : nullptr;
+}
+
+std::shared_ptr<const CollisionMesh> geom_collision_mesh(dGeomID geom) {
+  const detail::GeomObject* object = detail::object_of(geom);
+  return object ? object->mesh : nullptr;
 }
 
 namespace {
@@ -296,7 +382,15 @@ GeomSettings geom_settings(dGeomID geom) { return checked_object(geom, "boxtree:
 
 CollisionCounters geom_counters(dGeomID geom) {
   const detail::GeomObject& object = checked_object(geom, "boxtree::ode::geom_counters");
-  return {object.calls.load(), object.candidate_facets.load(), object.contacts.load()};
+  CollisionCounters counters;
+  counters.calls = object.calls.load();
+  counters.candidate_facets = object.candidate_facets.load();
+  counters.contacts = object.contacts.load();
+  counters.merged = object.merged.load();
+  counters.dropped = object.dropped.load();
+  counters.convexes_read_from_ode = object.convexes_read_from_ode.load();
+  counters.convexes_without_data = object.convexes_without_data.load();
+  return counters;
 }
 
 void reset_geom_counters(dGeomID geom) {
@@ -304,6 +398,10 @@ void reset_geom_counters(dGeomID geom) {
   object.calls = 0;
   object.candidate_facets = 0;
   object.contacts = 0;
+  object.merged = 0;
+  object.dropped = 0;
+  object.convexes_read_from_ode = 0;
+  object.convexes_without_data = 0;
 }
 
 namespace {
@@ -409,9 +507,9 @@ dGeomID create_convex(dSpaceID space, const dReal* planes, unsigned plane_count,
 
 void forget_trimesh_data(dTriMeshDataID data) {
   std::lock_guard<std::mutex> lock(detail::g_trimesh_mutex);
-  for (auto it = detail::g_trimesh_trees.begin(); it != detail::g_trimesh_trees.end();) {
+  for (auto it = detail::g_trimesh_meshes.begin(); it != detail::g_trimesh_meshes.end();) {
     if (std::get<0>(it->first) == data)
-      it = detail::g_trimesh_trees.erase(it);
+      it = detail::g_trimesh_meshes.erase(it);
     else
       ++it;
   }

@@ -15,8 +15,9 @@
 // other mesh's triangle index); the normal points from g2 into g1; depth >= 0. ODE swaps all of
 // that itself for dCollide(other, mesh).
 //
-// Ownership: the geom holds a boxtree::AnyTree, which shares the (immutable) mesh; the geom
-// frees its tree when destroyed, the mesh lives as long as any tree or caller holds it.
+// Ownership: the geom holds a boxtree::CollisionMesh (boxtree/collision_mesh.h: the tree, its
+// bounds and edge data), shared by every geom made from the same tree; it lives as long as any
+// geom or caller holds it. The collider (boxtree/collider.h) does the work; this adapter converts.
 // Threading: like the rest of ODE, a given geom must not be collided from two threads at once.
 #include <cstdint>
 #include <memory>
@@ -24,6 +25,8 @@
 #include <ode/ode.h>
 
 #include "boxtree/any_tree.h"
+#include "boxtree/collider.h"
+#include "boxtree/collision_mesh.h"
 #include "boxtree/ode/config.h"
 
 // ---- class registration ----
@@ -45,8 +48,11 @@ int dBoxtreeGetClass();
 // Throws boxtree::Error for an invalid mesh or an unknown method (before any ODE object is made).
 dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::TriangleMesh> mesh,
                            const char* method = "aabb");
-// From a tree built once and shared by many geoms (instances of the same mesh).
+// From a tree built once and shared by many geoms (instances of the same mesh): the geoms of one
+// built tree share one CollisionMesh (no per-facet memory per geom).
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const boxtree::AnyTree& tree);
+// From a collision mesh built once (boxtree::CollisionMesh::build) and shared.
+dGeomID dCreateBoxtreeMesh(dSpaceID space, std::shared_ptr<const boxtree::CollisionMesh> mesh);
 // From the arrays dGeomTriMeshDataBuildDouble / dGeomTriMeshDataBuildSingle take (strides in
 // bytes; index_count = 3 * triangles). Unlike ODE, the data is copied: the arrays may be freed.
 dGeomID dCreateBoxtreeMesh(dSpaceID space, const double* vertices, int vertex_stride, int vertex_count,
@@ -61,7 +67,9 @@ namespace boxtree::ode {
 struct GeomSettings {
   // false (default, like ODE's trimesh and a terrain wants): facets are one-sided, a shape whose
   // centre is behind a facet is pushed out through its front (counter-clockwise) face. true: out
-  // through whichever side the shape's centre is on (open meshes seen from both sides).
+  // through whichever side the shape's centre is on (open meshes seen from both sides). A mesh
+  // whose facets are not wound consistently collides two-sided whatever this says (ODE's message
+  // handler is told once, when its first geom is made).
   bool two_sided = false;
   // Contacts are also made for shapes within this distance of a facet (reported with depth 0):
   // speculative contacts that keep fast resting bodies steadier. 0 = touching or penetrating only.
@@ -73,30 +81,36 @@ struct GeomSettings {
   // facets gets the facet's normal instead of a tilted edge normal, so that bodies rest and slide
   // over the seams of a mesh without bumps. Edges folding convexly by more than 10 degrees stay.
   bool internal_edges = true;
+  // How two meshes' intersecting facet pairs become contacts (boxtree/collider.h).
+  MeshContactPolicy mesh_contacts = MeshContactPolicy::triangle_pairs;
 };
 
 bool is_boxtree_geom(dGeomID geom);
 // The geom's tree (nullptr if `geom` is not a boxtree geom). Valid while the geom lives.
 const AnyTree* geom_tree(dGeomID geom);
+// The geom's collision mesh (null if `geom` is not a boxtree geom).
+std::shared_ptr<const CollisionMesh> geom_collision_mesh(dGeomID geom);
 // Throws boxtree::Error if `geom` is not a boxtree geom.
 void set_geom_settings(dGeomID geom, const GeomSettings& settings);
 GeomSettings geom_settings(dGeomID geom);
 
 // Work counters of one geom, summed over its collider calls (for benchmarks and tests).
+// Atomic: ODE programs may collide different pairs of one geom from several threads.
 struct CollisionCounters {
-  std::uint64_t calls = 0;             // collider calls that reached the tree
-  std::uint64_t candidate_facets = 0;  // facets the tree query returned (narrowphase runs)
-  std::uint64_t contacts = 0;          // contacts written to ODE's arrays
+  std::uint64_t calls = 0;                   // collider calls that reached the tree
+  std::uint64_t candidate_facets = 0;        // facets the tree query returned (narrowphase runs)
+  std::uint64_t contacts = 0;                // contacts written to ODE's arrays
+  std::uint64_t merged = 0;                  // contacts merged into a deeper near-duplicate
+  std::uint64_t dropped = 0;                 // contacts left out to fit ODE's array (or its count)
+  std::uint64_t convexes_read_from_ode = 0;  // calls with a convex nobody registered (read through ODE)
+  std::uint64_t convexes_without_data = 0;   // calls with a convex whose points ODE did not give: no contacts
 };
 CollisionCounters geom_counters(dGeomID geom);
 void reset_geom_counters(dGeomID geom);
 
 // ---- convex geoms ----
-// ODE has no getter for a dConvex's data, so the collider needs its own copy: register it once
-// per convex geom, in the convex's own frame. A convex without a registration collides with
-// nothing (0 contacts). Each call checks the copy against ODE's AABB of the geom, so a stale
-// entry (a destroyed geom's address reused) is ignored rather than used; still, call
-// forget_convex before dGeomDestroy.
+// ODE has no getter for a dConvex's data. Register it once per convex geom, in the convex's own
+// frame, to give the collider its faces:
 //  * set_convex: the arguments of dCreateConvex / dGeomSetConvex (planes a x + b y + c z = d with
 //    outward normals, points 3 dReals each, polygons as per plane a corner count and the corner
 //    indices). With the faces the collider uses the exact separating-axis narrowphase (a patch
@@ -105,6 +119,12 @@ void reset_geom_counters(dGeomID geom);
 //    boxtree/convex_polyhedron.h), faces of at most 64 corners.
 //  * set_convex_points: the points only; the collider then runs GJK/EPA on their hull (one point
 //    per triangle).
+// A convex nobody registered still collides: its points are read through ODE's public API on
+// first contact (by its convex-plane collider) and kept as a points-only registration; ODE's
+// message handler is told once, and CollisionCounters::convexes_read_from_ode counts such calls.
+// Each call checks the registration against ODE's AABB of the geom, so stale data (a destroyed
+// geom's address reused, dGeomSetConvex since) is read again rather than used; still, call
+// forget_convex before dGeomDestroy.
 void set_convex(dGeomID convex, const dReal* planes, unsigned plane_count, const dReal* points, unsigned point_count,
                 const unsigned* polygons);
 void set_convex_points(dGeomID convex, const dReal* points, unsigned point_count);
