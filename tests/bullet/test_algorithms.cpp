@@ -163,7 +163,9 @@ TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
 // A hull with faces (initializePolyhedralFeatures) against the terrain, at fixed poses that
 // touch or cut into it: the separating-axis path's deepest contact against Bullet's own
 // per-triangle GJK/EPA (analyticContacts off: what it did before, and does without faces), one
-// collision pass each.
+// collision pass each. Two-sided facets: one-sided, GJK's contacts pushing out through a facet's
+// back are turned to its front at the depth below the facet's plane (collider.h), deeper than the
+// separating axes' least lift that clears the triangle where the hull overhangs its edge.
 TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
   const TriangleMesh terrain = make_terrain(24, 24, 5, 12, 1.5);
   std::mt19937 rng(23);
@@ -189,6 +191,7 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
       settings.hullFaces = mode == 0;
       World world(true, settings);
       auto ground = std::make_unique<BoxtreeMeshShape>(std::make_shared<TriangleMesh>(terrain), "aabb");
+      ground->setTwoSided(true);
       const BoxtreeMeshShape* ground_shape = ground.get();
       world.add(std::move(ground), 0, btVector3(0, 0, 0));
       auto hull = make_hull(shape_seed);

@@ -279,20 +279,29 @@ TEST(BulletMeshShape, FacetIdsPartsAndScaledCorners) {
 }
 
 // Counters: processAllTriangles counts its queries and the triangles it reports, rays count on
-// their own, countNarrowphaseTriangles adds, resetCounters zeroes all four.
+// their own, countCollision adds a collider call's counts, resetCounters zeroes them all.
 TEST(BulletMeshShape, CountersCountAndReset) {
   const BulletMesh bm(test_terrain());
   const BoxtreeMeshShape shape(*bm.array, "aabb");
-  const BoxtreeMeshShape::Counters& c = shape.counters();
+  BoxtreeMeshShape::Counters c = shape.counters();
   EXPECT_EQ(c.queries + c.triangles + c.ray_queries + c.narrowphase_triangles, 0u);
   const FacetSet first = collect(shape, btVector3(10, 10, -5), btVector3(20, 20, 20));
   const FacetSet second = collect(shape, btVector3(30, 5, -5), btVector3(32, 9, 20));
   ASSERT_FALSE(first.empty());
+  c = shape.counters();
   EXPECT_EQ(c.queries, 2u);
   EXPECT_EQ(c.triangles, first.size() + second.size());
-  shape.countNarrowphaseTriangles(5);
-  shape.countNarrowphaseTriangles(2);
+  CollisionCounts counts;
+  counts.candidates = 5;
+  counts.merged = 3;
+  counts.dropped = 1;
+  shape.countCollision(counts);
+  counts.candidates = 2;
+  shape.countCollision(counts);
+  c = shape.counters();
   EXPECT_EQ(c.narrowphase_triangles, 7u);
+  EXPECT_EQ(c.merged_contacts, 6u);
+  EXPECT_EQ(c.dropped_contacts, 2u);
   World world(true);
   world.add(std::make_unique<BoxtreeMeshShape>(*bm.array, "aabb"), 0, btVector3(0, 0, 0));
   const auto* in_world = static_cast<const BoxtreeMeshShape*>(world.bodies.back()->getCollisionShape());
@@ -302,10 +311,12 @@ TEST(BulletMeshShape, CountersCountAndReset) {
   EXPECT_EQ(in_world->counters().ray_queries, 1u);
   EXPECT_EQ(in_world->counters().queries, 0u);
   shape.resetCounters();
+  c = shape.counters();
   EXPECT_EQ(c.queries, 0u);
   EXPECT_EQ(c.triangles, 0u);
   EXPECT_EQ(c.ray_queries, 0u);
   EXPECT_EQ(c.narrowphase_triangles, 0u);
+  EXPECT_EQ(c.merged_contacts + c.dropped_contacts, 0u);
   in_world->resetCounters();
   EXPECT_EQ(in_world->counters().ray_queries, 0u);
 }

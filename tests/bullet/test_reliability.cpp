@@ -183,7 +183,7 @@ TEST(BulletReliability, OneSidedTerrainPushesBodiesBehindAFacetBackUp) {
       World world(true);
       world.world.setGravity(btVector3(0, 0, 0));
       auto terrain = std::make_unique<BoxtreeMeshShape>(*bullet_mesh.array);
-      EXPECT_TRUE(terrain->isTwoSided());  // the default, like btBvhTriangleMeshShape
+      EXPECT_FALSE(terrain->isTwoSided());  // the default: one-sided (counter-clockwise fronts)
       terrain->setTwoSided(two_sided);
       EXPECT_EQ(terrain->isTwoSided(), two_sided);
       world.add(std::move(terrain), 0, btVector3(-4, -4, 0));

@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <set>
 #include <string>
 
-#include "boxtree/active_edges.h"
 #include "convert.h"
 
 namespace boxtree::bullet {
@@ -91,7 +93,7 @@ BoxtreeMeshShape::BoxtreeMeshShape(const btStridingMeshInterface& mesh, const st
                                    const BuildSettings& settings) {
   const Method m = checked_method(method);
   auto copy = copy_mesh(mesh, m_partFirstFacet);
-  m_tree = AnyTree::build(std::move(copy), m, settings);
+  m_base = CollisionMesh::build(std::move(copy), m, settings);
   init();
   setLocalScaling(mesh.getScaling());
 }
@@ -121,23 +123,50 @@ BoxtreeMeshShape::BoxtreeMeshShape(btStridingMeshInterface* meshInterface, const
 
 BoxtreeMeshShape::BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method,
                                    const BuildSettings& settings)
-    : m_tree(AnyTree::build(std::move(mesh), checked_method(method), settings)) {
-  m_partFirstFacet = {0, static_cast<FacetId>(m_tree.facet_count())};
+    : m_base(CollisionMesh::build(std::move(mesh), checked_method(method), settings)) {
+  m_partFirstFacet = {0, static_cast<FacetId>(m_base->mesh().facet_count())};
   init();
 }
 
-BoxtreeMeshShape::BoxtreeMeshShape(AnyTree tree) : m_tree(std::move(tree)) {
-  if (m_tree.empty()) throw Error("BoxtreeMeshShape: the tree is empty");
-  m_partFirstFacet = {0, static_cast<FacetId>(m_tree.facet_count())};
+namespace {
+std::shared_ptr<const CollisionMesh> collision_mesh_of(const AnyTree& tree) {
+  if (tree.empty()) throw Error("BoxtreeMeshShape: the tree is empty");
+  return CollisionMesh::of(tree);
+}
+}  // namespace
+
+BoxtreeMeshShape::BoxtreeMeshShape(AnyTree tree) : BoxtreeMeshShape(collision_mesh_of(tree)) {}
+
+BoxtreeMeshShape::BoxtreeMeshShape(std::shared_ptr<const CollisionMesh> mesh) : m_base(std::move(mesh)) {
+  if (!m_base) throw Error("BoxtreeMeshShape: the collision mesh is null");
+  m_partFirstFacet = {0, static_cast<FacetId>(m_base->mesh().facet_count())};
   init();
 }
+
+namespace {
+// One line on stderr per mesh, the first time a shape is made from it.
+void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
+  if (mesh.consistent_winding()) return;
+  static std::mutex mutex;
+  static std::set<const void*> warned;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!warned.insert(mesh.tree().identity()).second) return;
+  }
+  std::fprintf(stderr,
+               "boxtree: a mesh of %zu facets has %zu edges whose two facets are wound the same way, so its "
+               "facets have no consistent front; its BoxtreeMeshShapes collide two-sided. Wind every facet "
+               "counter-clockwise seen from outside to make them one-sided.\n",
+               mesh.mesh().facet_count(), mesh.inconsistent_edges());
+}
+}  // namespace
 
 void BoxtreeMeshShape::init() {
   m_shapeType = FAST_CONCAVE_MESH_PROXYTYPE;
-  m_bounds = m_tree.bounds();
-  m_activeEdges = compute_active_edges(m_tree.mesh());
-  m_localAabbMin = to_bt(m_bounds.min);
-  m_localAabbMax = to_bt(m_bounds.max);
+  warn_once_if_inconsistently_wound(*m_base);
+  m_collision = m_base;
+  m_localAabbMin = to_bt(m_collision->bounds().min);
+  m_localAabbMax = to_bt(m_collision->bounds().max);
 }
 
 void BoxtreeMeshShape::setLocalScaling(const btVector3& scaling) {
@@ -147,16 +176,39 @@ void BoxtreeMeshShape::setLocalScaling(const btVector3& scaling) {
   }
   m_localScaling = scaling;
   m_unitScaling = scaling == btVector3(1, 1, 1);
+  m_collision = m_base->scaled(to_vec(scaling));
+  m_localAabbMin = to_bt(m_collision->bounds().min);
+  m_localAabbMax = to_bt(m_collision->bounds().max);
+}
+
+BoxtreeMeshShape::Counters BoxtreeMeshShape::counters() const {
+  Counters c;
+  c.queries = m_counters.queries.load(std::memory_order_relaxed);
+  c.triangles = m_counters.triangles.load(std::memory_order_relaxed);
+  c.ray_queries = m_counters.ray_queries.load(std::memory_order_relaxed);
+  c.narrowphase_triangles = m_counters.narrowphase_triangles.load(std::memory_order_relaxed);
+  c.merged_contacts = m_counters.merged_contacts.load(std::memory_order_relaxed);
+  c.dropped_contacts = m_counters.dropped_contacts.load(std::memory_order_relaxed);
+  return c;
+}
+
+void BoxtreeMeshShape::resetCounters() const {
+  for (auto* counter : {&m_counters.queries, &m_counters.triangles, &m_counters.ray_queries,
+                        &m_counters.narrowphase_triangles, &m_counters.merged_contacts, &m_counters.dropped_contacts})
+    counter->store(0, std::memory_order_relaxed);
+}
+
+void BoxtreeMeshShape::countCollision(const CollisionCounts& counts) const {
+  m_counters.narrowphase_triangles.fetch_add(counts.candidates, std::memory_order_relaxed);
+  m_counters.merged_contacts.fetch_add(counts.merged, std::memory_order_relaxed);
+  m_counters.dropped_contacts.fetch_add(counts.dropped, std::memory_order_relaxed);
 }
 
 void BoxtreeMeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const {
-  // Scaled local box (a negative scale swaps the ends), grown by the margin, then transformed.
-  const btVector3 a = m_localAabbMin * m_localScaling, b = m_localAabbMax * m_localScaling;
-  const btVector3 lo(btMin(a.x(), b.x()), btMin(a.y(), b.y()), btMin(a.z(), b.z()));
-  const btVector3 hi(btMax(a.x(), b.x()), btMax(a.y(), b.y()), btMax(a.z(), b.z()));
+  // The scaled local box grown by the margin, then transformed.
   const btVector3 margin(getMargin(), getMargin(), getMargin());
-  const btVector3 half = (hi - lo) * btScalar(0.5) + margin;
-  const btVector3 center = t((hi + lo) * btScalar(0.5));
+  const btVector3 half = (m_localAabbMax - m_localAabbMin) * btScalar(0.5) + margin;
+  const btVector3 center = t((m_localAabbMax + m_localAabbMin) * btScalar(0.5));
   const btVector3 extent = t.getBasis().absolute() * half;
   aabbMin = center - extent;
   aabbMax = center + extent;
@@ -165,7 +217,7 @@ void BoxtreeMeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVecto
 void BoxtreeMeshShape::calculateLocalInertia(btScalar mass, btVector3& inertia) const {
   // The inertia of the (scaled) bounding box, as btGImpactMeshShape does by default: meshes are
   // rarely closed or of known density, and a box keeps the solver stable.
-  const btVector3 e = (m_localAabbMax - m_localAabbMin) * m_localScaling.absolute();
+  const btVector3 e = m_localAabbMax - m_localAabbMin;
   inertia = mass / btScalar(12) *
             btVector3(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(), e.x() * e.x() + e.y() * e.y());
 }
@@ -181,7 +233,7 @@ FacetId BoxtreeMeshShape::partToFacet(int partId, int triangleIndex) const {
 }
 
 void BoxtreeMeshShape::scaledTriangle(FacetId facet, btVector3 out[3]) const {
-  const TriangleMesh& m = m_tree.mesh();
+  const TriangleMesh& m = m_base->mesh();
   for (int k = 0; k < 3; ++k) out[k] = to_bt(m.corner(facet, k)) * m_localScaling;
 }
 
@@ -201,7 +253,7 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
       }
       if (!TestAabbAgainstAabb2(lo, hi, aabbMin, aabbMax)) return;
     }
-    ++m_counters.triangles;
+    m_counters.triangles.fetch_add(1, std::memory_order_relaxed);
     callback->processTriangle(triangle, part, index);
   };
 
@@ -209,11 +261,10 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
   // callback's own closest hit, instead of scanning the segment's whole box. The callback keeps
   // doing Bullet's ray/triangle test, so hits, normals and ids are Bullet's.
   if (auto* ray_cb = dynamic_cast<btTriangleRaycastCallback*>(callback)) {
-    ++m_counters.ray_queries;
-    const btVector3 inv(1 / m_localScaling.x(), 1 / m_localScaling.y(), 1 / m_localScaling.z());
+    m_counters.ray_queries.fetch_add(1, std::memory_order_relaxed);
     Ray ray;
-    ray.origin = to_vec(ray_cb->m_from * inv);
-    ray.direction = to_vec((ray_cb->m_to - ray_cb->m_from) * inv);
+    ray.origin = to_vec(ray_cb->m_from);
+    ray.direction = to_vec(ray_cb->m_to - ray_cb->m_from);
     // The callback computes hit fractions in single precision, a few float ulps of the ray's
     // length either side of the exact ones; the tree walks in double. Pruning at the callback's
     // fraction itself could skip a triangle whose rounded fraction Bullet would have taken (a
@@ -221,7 +272,7 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
     constexpr Real kFractionSlack = 1e-5;
     ray.t_min = 0;
     ray.t_max = Real(ray_cb->m_hitFraction) + kFractionSlack;
-    m_tree.ray_candidates(ray, [&](FacetId f, Real) {
+    m_collision->tree().ray_candidates(ray, [&](FacetId f, Real) {
       report(f);
       return Real(ray_cb->m_hitFraction) + kFractionSlack;
     });
@@ -237,17 +288,18 @@ void BoxtreeMeshShape::processAllTriangles(btTriangleCallback* callback, const b
   }
 
   // Everything else (convex-concave contacts, debug drawing, internal-edge info, CCD, GImpact):
-  // the triangles overlapping the query box, in the unscaled frame of the tree.
-  ++m_counters.queries;
+  // the triangles overlapping the query box.
+  m_counters.queries.fetch_add(1, std::memory_order_relaxed);
   const Aabb box = toTreeFrame(aabbMin, aabbMax);
   if (box.is_empty()) return;
-  const bool aabb_tree = m_tree.method().kind == VolumeKind::aabb && m_tree.method().hybrid_level == 0;
+  const Method& method = m_collision->method();
+  const bool aabb_tree = method.kind == VolumeKind::aabb && method.hybrid_level == 0;
   // Axis-aligned trees report exactly the triangles whose own box overlaps the query box (what
   // btBvhTriangleMeshShape reports, without its quantization slack); oriented ones report the
   // triangles that overlap the query box itself (their leaves are tighter than a triangle's box).
   // The packed tree's leaf boxes are a grid step or two larger than the triangles' own, so the
   // triangle, fetched for the callback anyway, is checked against the query box.
-  m_tree.query_overlap(
+  m_collision->tree().query_overlap(
       box,
       [&](FacetId f) {
         report(f, aabb_tree);
@@ -261,17 +313,17 @@ Aabb BoxtreeMeshShape::toTreeFrame(const btVector3& aabbMin, const btVector3& aa
     if (std::isnan(double(aabbMin[i])) || std::isnan(double(aabbMax[i])) || aabbMin[i] > aabbMax[i])
       return Aabb::empty();
   }
-  const btVector3 inv(1 / m_localScaling.x(), 1 / m_localScaling.y(), 1 / m_localScaling.z());
-  Aabb box = Aabb::from_points(to_vec(aabbMin * inv), to_vec(aabbMax * inv));
+  Aabb box = Aabb::from_points(to_vec(aabbMin), to_vec(aabbMax));
   // Clip to the mesh's bounds: keeps Bullet's "everything" boxes (±BT_LARGE_FLOAT, debug drawing)
   // finite, and costs nothing.
-  box.min = box.min.cwiseMax(m_bounds.min);
-  box.max = box.max.cwiseMin(m_bounds.max);
+  const Aabb& bounds = m_collision->bounds();
+  box.min = box.min.cwiseMax(bounds.min);
+  box.max = box.max.cwiseMin(bounds.max);
   return box;
 }
 
 void BoxtreeMeshShape::sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const {
-  ++m_counters.ray_queries;
+  m_counters.ray_queries.fetch_add(1, std::memory_order_relaxed);
   // The cast shape's box at both ends of the sweep, in the mesh's (scaled) local frame, grown by
   // the triangles' collision margin.
   const btTransform to_local = cast.m_triangleToWorld.inverse();
@@ -285,26 +337,23 @@ void BoxtreeMeshShape::sweepCandidates(btTriangleConvexcastCallback& cast, Funct
   const Real length = motion.norm();
   if (!(length == length) || !half.allFinite() || !c0.allFinite()) return;
 
-  // Candidates: triangles meeting the region the box sweeps. With unit scaling that region is
-  // bounded tightly by an oriented box along the motion; a non-uniform scale maps oriented boxes
-  // to parallelepipeds, so then the swept region's axis-aligned box is used.
+  // Candidates: triangles meeting the region the box sweeps, bounded tightly by an oriented box
+  // along the motion.
   std::vector<std::pair<Real, FacetId>> candidates;
-  Vec3 axis = length > 0 ? Vec3(motion / length) : Vec3::UnitX();
+  const Vec3 axis = length > 0 ? Vec3(motion / length) : Vec3::UnitX();
+  const TriangleMesh& m = m_collision->mesh();
   auto collect = [&](FacetId f) {
-    const TriangleMesh& m = m_tree.mesh();
     Real start = std::numeric_limits<Real>::infinity();
-    for (int k = 0; k < 3; ++k)
-      start = std::min(start, (m.corner(f, k).cwiseProduct(to_vec(m_localScaling)) - c0).dot(axis));
+    for (int k = 0; k < 3; ++k) start = std::min(start, (m.corner(f, k) - c0).dot(axis));
     candidates.emplace_back(start, f);
     return true;
   };
-  if (m_unitScaling && length > 0) {
-    m_tree.query_overlap(swept_box(c0, c1, half), collect);
+  if (length > 0) {
+    m_collision->tree().query_overlap(swept_box(c0, c1, half), collect);
   } else {
-    const Vec3 lo = c0.cwiseMin(c1) - half, hi = c0.cwiseMax(c1) + half;
-    const Aabb box = toTreeFrame(to_bt(lo), to_bt(hi));
+    const Aabb box = toTreeFrame(to_bt(c0 - half), to_bt(c0 + half));
     if (box.is_empty()) return;
-    m_tree.query_overlap(box, collect);
+    m_collision->tree().query_overlap(box, collect);
   }
 
   // Nearest first: the box's leading face reaches a triangle starting at distance s along the

@@ -1,18 +1,21 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// Collision algorithms for BoxtreeMeshShape, registered with a btCollisionDispatcher:
-//  - convex body vs boxtree mesh: queries the tree with the body's tight volume (sphere, oriented
-//    box, capsule; the body's box in the mesh frame for other convex shapes), computes sphere /
-//    capsule / box contacts per facet with the core's analytic routines (boxtree/contact.h) and
-//    falls back to Bullet's per-triangle GJK for other convex shapes;
+// Collision algorithms for BoxtreeMeshShape, registered with a btCollisionDispatcher. Both put
+// the other body into the mesh's frame, call the core collider (boxtree/collider.h: the tree
+// query with the body's tight volume, the per-facet narrowphase, one-sided facets, internal
+// edges, the reduction to the manifold's 4 points) and hand its contacts to the manifold:
+//  - convex body vs boxtree mesh: spheres, boxes and capsules by the core's analytic routines,
+//    hulls with faces (hullFaces) by its separating axes, every other convex shape by Bullet's
+//    own per-triangle GJK/EPA inside the collider's pipeline;
 //  - boxtree mesh vs boxtree mesh (Bullet itself has nothing for concave vs concave): the
-//    tree-vs-tree query plus triangle-triangle contacts.
+//    collider's mesh pair (meshes of different methods, scaled or mirrored meshes included).
 //
 // Call once per dispatcher, before any body is added to the world (Bullet caches an algorithm
 // per overlapping pair).
 #include <btBulletCollisionCommon.h>
 
 #include "boxtree/bullet/config.h"
+#include "boxtree/collider.h"
 
 namespace boxtree::bullet {
 
@@ -23,16 +26,16 @@ struct AlgorithmSettings {
   // Hulls whose faces Bullet has computed (btPolyhedralConvexShape::initializePolyhedralFeatures)
   // get boxtree's exact separating axes too (with analyticContacts): the least penetration of the
   // hull with its margin, and a patch of points in one step where a face rests on facets, instead
-  // of one GJK/EPA point per triangle (a few mm shallower when deep). Off by default: on the drop
-  // scene (500 bodies, a sixth of them 12-corner hulls) it costs 5-6% more collision time than
-  // Bullet's GJK (alternating runs: 17.6-18.2 vs 18.5-19.3 ms per step; 12% before the
-  // separating axes' scratch stopped being initialised per call).
+  // of one GJK/EPA point per triangle (a few mm shallower when deep). Off by default: its cost
+  // against Bullet's GJK depends on the scene (bench/RESULTS.md).
   bool hullFaces = false;
   // Register the convex-vs-boxtree algorithm at all (false: Bullet's btConvexConcaveCollisionAlgorithm,
   // fed by processAllTriangles with the body's box).
   bool convexAlgorithm = true;
   // Register boxtree-vs-boxtree (mesh vs mesh).
   bool meshMeshAlgorithm = true;
+  // How two meshes' intersecting facet pairs become contacts (boxtree/collider.h).
+  MeshContactPolicy meshContacts = MeshContactPolicy::face_normals;
 };
 
 void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const AlgorithmSettings& settings = {});

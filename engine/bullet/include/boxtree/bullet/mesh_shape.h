@@ -14,10 +14,20 @@
 //    btTriangleRaycastCallback / btTriangleConvexcastCallback) and answered by a front-to-back
 //    ray walk of the tree that prunes with the current closest hit.
 //  - convex bodies against the mesh, and mesh against mesh: collision algorithms registered by
-//    registerBoxtreeAlgorithms (algorithms.h) that query with the body's tight volume.
+//    registerBoxtreeAlgorithms (algorithms.h) that call the core collider (boxtree/collider.h).
+//
+// The shape holds a boxtree::CollisionMesh (boxtree/collision_mesh.h): the tree, its bounds and
+// edge data, shared by every shape made from the same tree or collision mesh. A non-unit local
+// scaling builds a scaled copy once (as btBvhTriangleMeshShape::setLocalScaling rebuilds its
+// BVH), so scaled shapes, mirrored ones included, collide exactly like pre-scaled meshes.
+//
+// Facets are one-sided by default (counter-clockwise is the front; setTwoSided(true) for open
+// meshes seen from both sides); a mesh whose winding is inconsistent collides two-sided, and
+// says so once on stderr.
 //
 // The shape type is FAST_CONCAVE_MESH_PROXYTYPE: Bullet gives it the generic concave treatment
 // and casts it to nothing (CUSTOM_CONCAVE_SHAPE_TYPE would be taken for an SDF shape in 3.24).
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,6 +39,8 @@
 class btTriangleConvexcastCallback;
 
 #include "boxtree/any_tree.h"
+#include "boxtree/collider.h"
+#include "boxtree/collision_mesh.h"
 
 namespace boxtree::bullet {
 
@@ -58,8 +70,11 @@ class alignas(16) BoxtreeMeshShape : public btConcaveShape {
   // From a boxtree mesh (one part, id 0; triangle index = facet id). The tree shares the mesh.
   explicit BoxtreeMeshShape(std::shared_ptr<const TriangleMesh> mesh, const std::string& method = "aabb",
                             const BuildSettings& settings = {});
-  // From an already built tree (e.g. shared between shapes of several bodies).
+  // From an already built tree (e.g. shared between shapes of several bodies): the shapes of one
+  // built tree share one CollisionMesh.
   explicit BoxtreeMeshShape(AnyTree tree);
+  // From a collision mesh built once and shared (throws boxtree::Error on null).
+  explicit BoxtreeMeshShape(std::shared_ptr<const CollisionMesh> mesh);
 
   // ---- btConcaveShape / btCollisionShape ----
   void processAllTriangles(btTriangleCallback* callback, const btVector3& aabbMin,
@@ -73,51 +88,64 @@ class alignas(16) BoxtreeMeshShape : public btConcaveShape {
   const char* getName() const override { return "BoxtreeMesh"; }
 
   // ---- boxtree side ----
-  const AnyTree& tree() const { return m_tree; }
-  const TriangleMesh& mesh() const { return m_tree.mesh(); }
+  // The tree and mesh as built (unscaled; facet ids are the mesh's triangle order).
+  const AnyTree& tree() const { return m_base->tree(); }
+  const TriangleMesh& mesh() const { return m_base->mesh(); }
+  // What the collider reads: the collision mesh with the local scaling applied (the built one
+  // itself for unit scaling).
+  const CollisionMesh& collisionMesh() const { return *m_collision; }
+  const std::shared_ptr<const CollisionMesh>& sharedCollisionMesh() const { return m_base; }
   // Bullet's (part id, triangle index) of a facet, and back.
   void facetToPart(FacetId facet, int& partId, int& triangleIndex) const;
   FacetId partToFacet(int partId, int triangleIndex) const;
   // A facet's corners in the shape's local frame, local scaling applied (as Bullet reports them).
   void scaledTriangle(FacetId facet, btVector3 out[3]) const;
   bool hasUnitScaling() const { return m_unitScaling; }
-  // Per facet, which edges are convex creases (boxtree/active_edges.h); contacts on the others
-  // get the face normal, so bodies slide over flat and concave edges without bumping.
-  const std::vector<std::uint8_t>& activeEdges() const { return m_activeEdges; }
-  // Two-sided (the default, like btBvhTriangleMeshShape) or one-sided facets for the boxtree
-  // algorithms' contacts: one-sided, a body whose centre has been pushed behind a facet (counter-
-  // clockwise winding is the front) is pushed back out through the front, never further in. For
-  // terrains and closed meshes wound outward: under a deep pile, a two-sided terrain lets a
-  // body that was pressed past a facet's plane fall through (boxtree/contact.h, ContactOptions).
+  // Per facet, which edges are convex creases (boxtree/active_edges.h; of the scaled mesh);
+  // contacts on the others get the face normal, so bodies slide over flat and concave edges
+  // without bumping.
+  const std::vector<std::uint8_t>& activeEdges() const { return m_collision->active_edges(); }
+  // One-sided facets (the default) or two-sided ones for the boxtree algorithms' contacts:
+  // one-sided, a body whose centre has been pushed behind a facet (counter-clockwise winding is
+  // the front) is pushed back out through the front, never further in: terrains and closed
+  // meshes wound outward. Two-sided: open meshes seen from both sides (a two-sided terrain lets
+  // a body pressed past a facet's plane under a deep pile fall through: boxtree/contact.h).
   void setTwoSided(bool twoSided) { m_twoSided = twoSided; }
   bool isTwoSided() const { return m_twoSided; }
 
-  // Counters for benchmarks and tests (not synchronized: read them from one thread).
+  // Counters for benchmarks and tests; atomic (relaxed), so that a multithreaded dispatcher may
+  // collide several pairs of one shape at once.
   struct Counters {
     std::uint64_t queries = 0;                // processAllTriangles box queries
     std::uint64_t triangles = 0;              // triangles handed to Bullet callbacks by processAllTriangles
     std::uint64_t ray_queries = 0;            // rays and sweeps answered by the ray path
     std::uint64_t narrowphase_triangles = 0;  // triangles the boxtree algorithms ran a contact routine on
+    std::uint64_t merged_contacts = 0;        // contacts the algorithms merged into a deeper near-duplicate
+    std::uint64_t dropped_contacts = 0;       // contacts the algorithms left out (beyond the manifold's 4)
   };
-  const Counters& counters() const { return m_counters; }
-  void resetCounters() const { m_counters = {}; }
-  void countNarrowphaseTriangles(std::uint64_t n) const { m_counters.narrowphase_triangles += n; }
+  Counters counters() const;
+  void resetCounters() const;
+  // For the algorithms: what one collider call did.
+  void countCollision(const CollisionCounts& counts) const;
 
  private:
   void init();
-  // A query box of the scaled local frame in the tree's (unscaled) frame, clipped to the mesh.
+  // A query box of the scaled local frame, clipped to the mesh.
   Aabb toTreeFrame(const btVector3& aabbMin, const btVector3& aabbMax) const;
   void sweepCandidates(btTriangleConvexcastCallback& cast, FunctionRef<void(FacetId)> report) const;
 
-  AnyTree m_tree;
-  std::vector<FacetId> m_partFirstFacet;  // part p owns facets [m_partFirstFacet[p], m_partFirstFacet[p+1])
+  std::shared_ptr<const CollisionMesh> m_base;       // as built
+  std::shared_ptr<const CollisionMesh> m_collision;  // m_base scaled by m_localScaling
+  std::vector<FacetId> m_partFirstFacet;             // part p owns facets [m_partFirstFacet[p], m_partFirstFacet[p+1])
   btVector3 m_localScaling{1, 1, 1};
   bool m_unitScaling = true;
-  std::vector<std::uint8_t> m_activeEdges;
-  bool m_twoSided = true;
-  Aabb m_bounds;                             // unscaled mesh bounds
-  btVector3 m_localAabbMin, m_localAabbMax;  // the same, as Bullet vectors
-  mutable Counters m_counters;
+  bool m_twoSided = false;
+  btVector3 m_localAabbMin, m_localAabbMax;  // of the scaled mesh
+  struct AtomicCounters {
+    std::atomic<std::uint64_t> queries{0}, triangles{0}, ray_queries{0}, narrowphase_triangles{0}, merged_contacts{0},
+        dropped_contacts{0};
+  };
+  mutable AtomicCounters m_counters;
 };
 
 }  // namespace boxtree::bullet
