@@ -289,7 +289,7 @@ void run_terrain(std::ofstream& csv) {
       using V = typename decltype(tag)::type;
       BuildSettings greedy;
       BuildSettings terrain;
-      terrain.strategy = BuildStrategy::terrain;
+      terrain.merge_rule = planar::terrain_merge_order;
       compare_on_terrain<V>(csv, name, "greedy", mesh, greedy);
       compare_on_terrain<V>(csv, name, "terrain", mesh, terrain);
       return 0;
