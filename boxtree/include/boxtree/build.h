@@ -31,15 +31,12 @@ enum class ParentFit { enclose_children, fit_facets };
 // How the greedy builder ranks candidate pairs for the oriented kinds (axis-aligned boxes are
 // always ranked by their exact merged box, which is cheap):
 //  merged_volume (default): the paper's rule to the letter: every candidate's parent volume is
-//    fitted (PCA, minimum-area rectangle or triangle) and ranked by its cost; a fit per candidate,
-//    tens of microseconds per facet (100k-facet terrain: obb-min ~31 us/facet, pie-min ~100).
+//    fitted (PCA, minimum-area rectangle or triangle) and ranked by its cost; a fit per candidate.
 //  bounding_box: by the cost (BuildSettings::cost) of the axis-aligned box around both nodes, a
 //    cheap proxy of the merged volume's size, so the tree has the aabb build's shape; only the
-//    chosen pairs' parents are fitted (n - 1 fits, in the final layout). About 9x faster for
-//    obb-min (~3.6 us/facet), 8-12x for pie-min (~8-12 us/facet), but looser trees: the paper's
-//    Table 1 volume-test counts (bench/paper) grow by 5-8% for obb-* and 12-16% for pie-*
-//    (geometric mean over all pairs and gaps; up to +25% for obb, +40-70% for pie on the
-//    9996-facet spheres).
+//    chosen pairs' parents are fitted (n - 1 fits, in the final layout). A faster build, but
+//    looser trees (more volume tests per query). Earlier figures: bench/RESULTS.md, "Notes from
+//    earlier measurements".
 enum class PairRanking { merged_volume, bounding_box };
 
 // A tree's shape given from outside the greedy rounds: its parents in build order. Leaves
