@@ -445,16 +445,13 @@ void fit_parents_to_facets(std::vector<Volume>& volumes, const std::vector<std::
   }
 }
 
-// BuildSettings::merge_rule: the tree of the rule's merge order, each parent the enclosing volume
-// of its children, laid out depth-first.
+// BuildSettings::merge_rule: the tree of the rule's merge order over a mesh build_tree has
+// checked, each parent the enclosing volume of its children, laid out depth-first.
 template <class Volume>
-Tree<Volume> build_by_rule(std::shared_ptr<const TriangleMesh> mesh_ptr, MergeRule rule, BuildStats* stats) {
-  const auto start = std::chrono::steady_clock::now();
-  if (!mesh_ptr) throw Error("build_tree: no mesh given");
+Tree<Volume> build_by_rule(std::shared_ptr<const TriangleMesh> mesh_ptr, MergeRule rule,
+                           std::chrono::steady_clock::time_point start, BuildStats* stats) {
   const TriangleMesh& mesh = *mesh_ptr;
-  validate_mesh(mesh);
   const std::size_t n = mesh.facet_count();
-  if (n > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
   const MergeOrder order = rule(mesh);
   BOXTREE_ASSERT(order.first.size() == n - 1 && order.second.size() == n - 1, "a merge order has n - 1 parents");
 
@@ -500,13 +497,13 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
                        settings.parent_fit == ParentFit::fit_facets);
   }
-  if (settings.merge_rule) return build_by_rule<Volume>(std::move(mesh_ptr), settings.merge_rule, stats);
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
   const TriangleMesh& mesh = *mesh_ptr;
   validate_mesh(mesh);
   const std::size_t n = mesh.facet_count();
   if (n > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
+  if (settings.merge_rule) return build_by_rule<Volume>(std::move(mesh_ptr), settings.merge_rule, start, stats);
   if (settings.near_window < 1) throw Error("build_tree: near_window must be at least 1");
   if (settings.max_neighbors < 2) throw Error("build_tree: max_neighbors must be at least 2");
 
