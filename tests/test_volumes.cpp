@@ -706,7 +706,7 @@ TEST(VolumeFit, ObbRulesUseThePrincipalAxes) {
       EXPECT_NEAR(alignment(box.axes.col(match), fixed), 1, 1e-12) << i;
       const Vec3 u = principal.col(rule == PrincipalAxis::max ? 1 : 0);
       const Vec3 v = principal.col(rule == PrincipalAxis::max ? 2 : 1);
-      std::vector<detail::Vec2> planar;
+      std::vector<Vec2> planar;
       for (const Vec3& p : pts) planar.emplace_back(u.dot(p), v.dot(p));
       const Real area = detail::min_area_rectangle(planar).area();
       const Real box_area = 4 * box.half_extents[(match + 1) % 3] * box.half_extents[(match + 2) % 3];
@@ -738,7 +738,7 @@ TEST(VolumeFit, PieRulesUseThePrincipalAxisAndTheMinimumTriangles) {
         EXPECT_NEAR(p.height, hi - lo, 1e-9 * (1 + hi - lo)) << i;
         const Vec3 u = principal.col(axis == PrincipalAxis::max ? 1 : 0);
         const Vec3 v = principal.col(axis == PrincipalAxis::max ? 2 : 1);
-        std::vector<detail::Vec2> planar;
+        std::vector<Vec2> planar;
         for (const Vec3& q : pts) planar.emplace_back(u.dot(q), v.dot(q));
         const Real expected = rule == TriangleRule::isosceles ? detail::min_area_isosceles_triangle(planar).area()
                                                               : detail::min_area_triangle(planar).area();

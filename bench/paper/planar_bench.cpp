@@ -57,8 +57,8 @@ void run_planar(std::ofstream& csv, std::size_t max_n, bool quick) {
       // Point location: random points, after a warm-up pass.
       Random random(7);
       const int queries = 200000;
-      std::vector<planar::Vec2> points(queries);
-      for (auto& p : points) p = planar::Vec2(random.uniform(), random.uniform());
+      std::vector<Vec2> points(queries);
+      for (auto& p : points) p = Vec2(random.uniform(), random.uniform());
       std::size_t checksum = 0;
       for (int i = 0; i < queries / 10; ++i) checksum += *planar::locate_point(tree, points[std::size_t(i)]);
       planar::PlanarQueryStats qstats;
@@ -289,7 +289,7 @@ void run_terrain(std::ofstream& csv) {
       using V = typename decltype(tag)::type;
       BuildSettings greedy;
       BuildSettings terrain;
-      terrain.strategy = BuildStrategy::terrain;
+      terrain.merge_rule = planar::terrain_merge_order;
       compare_on_terrain<V>(csv, name, "greedy", mesh, greedy);
       compare_on_terrain<V>(csv, name, "terrain", mesh, terrain);
       return 0;

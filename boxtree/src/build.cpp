@@ -41,7 +41,7 @@
 #include <type_traits>
 
 #include "boxtree/detail/volume_kinds.h"
-#include "boxtree/planar/terrain.h"
+#include "internal.h"
 
 namespace boxtree {
 namespace {
@@ -445,6 +445,48 @@ void fit_parents_to_facets(std::vector<Volume>& volumes, const std::vector<std::
   }
 }
 
+// BuildSettings::merge_rule: the tree of the rule's merge order over a mesh build_tree has
+// checked, each parent the enclosing volume of its children, laid out depth-first.
+template <class Volume>
+Tree<Volume> build_by_rule(std::shared_ptr<const TriangleMesh> mesh_ptr, MergeRule rule,
+                           std::chrono::steady_clock::time_point start, BuildStats* stats) {
+  const TriangleMesh& mesh = *mesh_ptr;
+  const std::size_t n = mesh.facet_count();
+  const MergeOrder order = rule(mesh);
+  BOXTREE_ASSERT(order.first.size() == n - 1 && order.second.size() == n - 1, "a merge order has n - 1 parents");
+
+  // Build order: leaves 0..n-1 are the facets, parent k is node n + k.
+  const std::size_t node_count = 2 * n - 1;
+  std::vector<Volume> volumes;
+  volumes.reserve(node_count);
+  for (FacetId f = 0; f < n; ++f)
+    volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  std::vector<std::uint32_t> first(n, 0), second(n, 0);  // by build index (a leaf's are unused)
+  first.insert(first.end(), order.first.begin(), order.first.end());
+  second.insert(second.end(), order.second.begin(), order.second.end());
+  std::vector<int> heights(node_count, 0);
+  std::vector<bool> merged(node_count, false);
+  for (std::size_t node = n; node < node_count; ++node) {
+    const std::uint32_t a = first[node], b = second[node];
+    BOXTREE_ASSERT(a < node && b < node && a != b && !merged[a] && !merged[b],
+                   "a merge order merges every node once, after it is built");
+    merged[a] = merged[b] = true;
+    volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
+    heights[node] = 1 + std::max(heights[a], heights[b]);
+  }
+
+  std::vector<Volume> out_volumes;
+  std::vector<std::uint32_t> out_links;
+  const std::uint32_t root = std::uint32_t(node_count - 1);
+  detail::depth_first_layout(volumes, first, second, root, n, Tree<Volume>::kLeafFlag, out_volumes, out_links);
+  if (stats) {
+    stats->rounds = order.rounds;
+    stats->candidate_pairs = order.candidate_pairs;
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), heights[root]);
+}
+
 }  // namespace
 
 template <class Volume>
@@ -455,14 +497,13 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
     return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
                        settings.parent_fit == ParentFit::fit_facets);
   }
-  if (settings.strategy == BuildStrategy::terrain)
-    return planar::build_terrain_tree<Volume>(std::move(mesh_ptr), stats);
   const auto start = std::chrono::steady_clock::now();
   if (!mesh_ptr) throw Error("build_tree: no mesh given");
   const TriangleMesh& mesh = *mesh_ptr;
   validate_mesh(mesh);
   const std::size_t n = mesh.facet_count();
   if (n > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
+  if (settings.merge_rule) return build_by_rule<Volume>(std::move(mesh_ptr), settings.merge_rule, start, stats);
   if (settings.near_window < 1) throw Error("build_tree: near_window must be at least 1");
   if (settings.max_neighbors < 2) throw Error("build_tree: max_neighbors must be at least 2");
 

@@ -26,8 +26,6 @@
 namespace boxtree {
 namespace {
 
-using Vec2 = Eigen::Matrix<Real, 2, 1>;
-
 bool is_zero(const Vec3& v) { return v.x() == 0 && v.y() == 0 && v.z() == 0; }
 
 // ((b - a) x (c - a)) . (d - a): positive when d lies on the side of the plane (a, b, c) that the

@@ -22,7 +22,7 @@ bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb)
 // threshold. Defined in volume_obb.cpp.
 void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2);
 
-// The builders' final layout (build_tree, planar::build_terrain_tree): nodes in build order
+// The final layout of a tree built by a MergeRule (build.cpp): nodes in build order
 // (leaves 0..leaf_count-1 are the facets, parents after, children `first`/`second`) laid out
 // depth-first from `root` with the two children of a node in adjacent slots, as Tree expects.
 // depth_first_order gives the links and, per slot, the node's build index (children always get

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// The packed pie-slice tree (packed_prism_tree.h): construction. The queries are the walks of
-// query.cpp and collide.cpp, run over this form through query_internal.h's PackedPrismView.
+// The packed pie-slice tree (packed_prism_tree.h): construction, and the queries, which are the
+// generic walks of walks.h (those of Tree<V>) run over this form through PackedPrismView (below).
 //
 // Why every decoded prism holds its exact prism (and so every facet below it):
 //  1. The exact prism E of a node (base b0 b1 b2, unit axis a, height h) is the convex hull of
@@ -35,6 +35,7 @@
 #include <limits>
 
 #include "internal.h"
+#include "walks.h"
 
 namespace boxtree {
 
@@ -268,5 +269,95 @@ template void PackedPrismTree::pack(const Tree<PieMax>&);
 template void PackedPrismTree::pack(const Tree<PieMin>&);
 template void PackedPrismTree::pack(const Tree<PieMaxGeneral>&);
 template void PackedPrismTree::pack(const Tree<PieMinGeneral>&);
+
+// ---- The queries: the generic walks (walks.h) over decoded prisms ----
+
+namespace {
+
+// How the walks see this form (the View of walks.h): a node is a link (kLeafFlag | facet, or an
+// inner node's index); a leaf's volume is its facet's prism, rebuilt from the mesh.
+struct PackedPrismView {
+  using Node = std::uint32_t;
+  const PackedPrismTree& tree;
+
+  bool empty() const { return tree.empty(); }
+  const TriangleMesh& mesh() const { return tree.mesh(); }
+  Node root() const { return tree.root_link(); }
+  static bool is_leaf(Node node) { return PackedPrismTree::is_leaf(node); }
+  static FacetId facet(Node node) { return PackedPrismTree::facet(node); }
+  std::array<Node, 2> children(Node inner) const {
+    const PackedPrismTree::Node& node = tree.nodes()[inner];
+    return {node.child[0], node.child[1]};
+  }
+  Prism volume(Node node) const { return tree.prism_of_link(node); }
+};
+
+using detail::all_hits_of;
+using detail::candidates_of;
+using detail::closest_hit_of;
+using detail::overlap_of;
+using detail::plane_of;
+
+}  // namespace
+
+std::optional<RayHit> ray_closest_hit(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return closest_hit_of(PackedPrismView{tree}, ray, stats);
+}
+
+void ray_candidates(const PackedPrismTree& tree, const Ray& ray, FunctionRef<Real(FacetId, Real)> visit,
+                    QueryStats* stats) {
+  candidates_of(PackedPrismView{tree}, ray, visit, stats);
+}
+
+void ray_all_hits(const PackedPrismTree& tree, const Ray& ray, FunctionRef<bool(const RayHit&)> visit,
+                  QueryStats* stats) {
+  all_hits_of(PackedPrismView{tree}, ray, visit, stats);
+}
+
+std::optional<RayHit> ray_any_hit(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return detail::first_hit([&](auto visit) { ray_all_hits(tree, ray, visit, stats); });
+}
+
+std::vector<RayHit> ray_all_hits(const PackedPrismTree& tree, const Ray& ray, QueryStats* stats) {
+  return detail::collect_sorted<RayHit>([&](auto visit) { ray_all_hits(tree, ray, visit, stats); }, detail::nearer_hit);
+}
+
+template <class Shape>
+void query_overlap(const PackedPrismTree& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,
+                   FacetTest test) {
+  overlap_of(PackedPrismView{tree}, shape, visit, stats, test);
+}
+
+template <class Shape>
+std::vector<FacetId> query_overlap(const PackedPrismTree& tree, const Shape& shape, QueryStats* stats, FacetTest test) {
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_overlap<Shape>(tree, shape, visit, stats, test); });
+}
+
+void query_plane(const PackedPrismTree& tree, const Plane& plane, FunctionRef<bool(FacetId)> visit, QueryStats* stats) {
+  plane_of(PackedPrismView{tree}, plane, visit, stats);
+}
+
+std::vector<FacetId> query_plane(const PackedPrismTree& tree, const Plane& plane, QueryStats* stats) {
+  return detail::collect_sorted<FacetId>([&](auto visit) { query_plane(tree, plane, visit, stats); });
+}
+
+#define BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(S)                                                         \
+  template void query_overlap<S>(const PackedPrismTree&, const S&, FunctionRef<bool(FacetId)>, QueryStats*, \
+                                 FacetTest);                                                                \
+  template std::vector<FacetId> query_overlap<S>(const PackedPrismTree&, const S&, QueryStats*, FacetTest);
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Aabb)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Obb)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Sphere)
+BOXTREE_INSTANTIATE_PACKED_PRISM_OVERLAP(Capsule)
+
+void collide(const PackedPrismTree& a, const PackedPrismTree& b, const RigidTransform& a_from_b,
+             FunctionRef<bool(const FacetPair&)> visit, QueryStats* stats, const CollideSettings& settings) {
+  detail::collide_views(PackedPrismView{a}, PackedPrismView{b}, a_from_b, visit, stats, settings);
+}
+
+std::vector<FacetPair> collide(const PackedPrismTree& a, const PackedPrismTree& b, const RigidTransform& a_from_b,
+                               QueryStats* stats, const CollideSettings& settings) {
+  return detail::collect_sorted<FacetPair>([&](auto visit) { collide(a, b, a_from_b, visit, stats, settings); });
+}
 
 }  // namespace boxtree

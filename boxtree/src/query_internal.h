@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// Pieces shared by the query files (query.cpp, collide.cpp, packed_tree.cpp); not public API.
+// Pieces shared by the query files (query.cpp, collide.cpp, walks.h, the packed trees); not public API.
 #include <algorithm>
 #include <array>
 #include <functional>
@@ -8,15 +8,14 @@
 #include <vector>
 
 #include "boxtree/collide.h"
-#include "boxtree/packed_prism_tree.h"
 #include "boxtree/query.h"
 
 namespace boxtree::detail {
 
-// How the walks of query.cpp and collide.cpp see a binary hierarchy: a handle per node, whether
-// it is a leaf, its facet or its two children, and its volume. One walk then serves Tree<V>
-// (TreeView: the stored volume, by reference) and PackedPrismTree (PackedPrismView: a decoded
-// prism, by value), so the compact form answers with the very code of the exact one.
+// How the walks (walks.h) see a binary hierarchy, its View: a handle per node, whether it is a
+// leaf, its facet or its two children, and its volume. One walk then serves Tree<V> (TreeView:
+// the stored volume, by reference) and a packed form (packed_prism_tree.cpp's PackedPrismView: a
+// decoded prism, by value), so the compact form answers with the very code of the exact one.
 template <class Volume>
 struct TreeView {
   using Node = NodeIndex;
@@ -32,24 +31,6 @@ struct TreeView {
     return {first, first + 1};
   }
   const Volume& volume(Node node) const { return tree.volume(node); }
-};
-
-// A node is a link (kLeafFlag | facet, or an inner node's index); a leaf's volume is its facet's
-// prism, rebuilt from the mesh.
-struct PackedPrismView {
-  using Node = std::uint32_t;
-  const PackedPrismTree& tree;
-
-  bool empty() const { return tree.empty(); }
-  const TriangleMesh& mesh() const { return tree.mesh(); }
-  Node root() const { return tree.root_link(); }
-  static bool is_leaf(Node node) { return PackedPrismTree::is_leaf(node); }
-  static FacetId facet(Node node) { return PackedPrismTree::facet(node); }
-  std::array<Node, 2> children(Node inner) const {
-    const PackedPrismTree::Node& node = tree.nodes()[inner];
-    return {node.child[0], node.child[1]};
-  }
-  Prism volume(Node node) const { return tree.prism_of_link(node); }
 };
 
 // Counts a query's work locally and adds it to the caller's QueryStats (if any) when done.

@@ -88,8 +88,8 @@ Obb fit_box(const Mat3& axes, const Vec3* points, std::size_t count, const Vec3&
 // Right-handed frame whose third axis is `normal` (unit) and whose first two axes are the
 // rectangle's axes (given in the in-plane basis u, v).
 Mat3 frame_from_rectangle(const Vec3& u, const Vec3& v, const detail::Rectangle2& rect) {
-  const detail::Vec2 ru = rect.axis_u;
-  const detail::Vec2 rv = rect.axis_v();
+  const Vec2 ru = rect.axis_u;
+  const Vec2 rv = rect.axis_v();
   Mat3 axes;
   axes.col(0) = (u * ru.x() + v * ru.y()).normalized();
   axes.col(1) = (u * rv.x() + v * rv.y()).normalized();
@@ -320,8 +320,8 @@ Obb obb_from_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 centroid = (a + b + c) / 3;
   Vec3 u, v, normal;
   if (detail::facet_frame(a, b, c, u, v, normal)) {
-    std::vector<detail::Vec2> planar(3);
-    for (int k = 0; k < 3; ++k) planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
+    std::vector<Vec2> planar(3);
+    for (int k = 0; k < 3; ++k) planar[k] = Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
     // Only the rectangle's orientation is used: a minimum-area rectangle is tight along its axes,
     // so fit_box recovers its extents (and center) from the projections.
     return fit_box(frame_from_rectangle(u, v, detail::min_area_rectangle(planar)), points, 3, centroid, Padding::leaf);
@@ -357,9 +357,8 @@ Obb obb_enclosing_points(const Vec3* points, std::size_t count, PrincipalAxis ax
   const int fixed = axis == PrincipalAxis::max ? 0 : 2;
   const Vec3 u = principal.col(fixed == 0 ? 1 : 0);
   const Vec3 v = principal.col(fixed == 0 ? 2 : 1);
-  std::vector<detail::Vec2> planar(count);
-  for (std::size_t k = 0; k < count; ++k)
-    planar[k] = detail::Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
+  std::vector<Vec2> planar(count);
+  for (std::size_t k = 0; k < count; ++k) planar[k] = Vec2(u.dot(points[k] - centroid), v.dot(points[k] - centroid));
   return fit_box(frame_from_rectangle(u, v, detail::min_area_rectangle(planar)), points, count, centroid,
                  Padding::parent);
 }

@@ -150,20 +150,20 @@ std::array<Vec3, 3> lift(const detail::Triangle2& t, const Vec3& origin, const V
 // sides. False if the triangle is degenerate or has an angle under ~0.1 degree (the offset
 // corner would run off by d / sin(angle / 2)); the caller then uses a thin triangle instead.
 bool offset(const detail::Triangle2& t, Real d, detail::Triangle2& out) {
-  const detail::Vec2 e1 = t.corners[1] - t.corners[0];
-  const detail::Vec2 e2 = t.corners[2] - t.corners[0];
+  const Vec2 e1 = t.corners[1] - t.corners[0];
+  const Vec2 e2 = t.corners[2] - t.corners[0];
   const Real orientation = e1.x() * e2.y() - e1.y() * e2.x();
   if (!(orientation != 0)) return false;
-  std::array<detail::Vec2, 3> normal;
+  std::array<Vec2, 3> normal;
   for (int i = 0; i < 3; ++i) {
-    const detail::Vec2 e = t.corners[(i + 1) % 3] - t.corners[i];
+    const Vec2 e = t.corners[(i + 1) % 3] - t.corners[i];
     const Real length = e.norm();
     if (!(length > 0)) return false;
-    normal[i] = (orientation > 0 ? detail::Vec2(e.y(), -e.x()) : detail::Vec2(-e.y(), e.x())) / length;
+    normal[i] = (orientation > 0 ? Vec2(e.y(), -e.x()) : Vec2(-e.y(), e.x())) / length;
   }
   for (int i = 0; i < 3; ++i) {
-    const detail::Vec2& n1 = normal[(i + 2) % 3];  // the side ending at corner i
-    const detail::Vec2& n2 = normal[i];            // the side starting there
+    const Vec2& n1 = normal[(i + 2) % 3];  // the side ending at corner i
+    const Vec2& n2 = normal[i];            // the side starting there
     const Real c = 1 + n1.dot(n2);
     if (!(c > 1e-6)) return false;
     out.corners[i] = t.corners[i] + (n1 + n2) * (d / c);
@@ -174,10 +174,10 @@ bool offset(const detail::Triangle2& t, Real d, detail::Triangle2& out) {
 // A thin right triangle around the points' bounding rectangle in the frame (u, perp(u)), grown by
 // d: legs 2W and 2H around a W x H rectangle. For (nearly) collinear points along u it is as
 // thin as they are.
-detail::Triangle2 thin_triangle(const std::vector<detail::Vec2>& points, const detail::Vec2& u, Real d) {
-  const detail::Vec2 v(-u.y(), u.x());
+detail::Triangle2 thin_triangle(const std::vector<Vec2>& points, const Vec2& u, Real d) {
+  const Vec2 v(-u.y(), u.x());
   Real a0 = kInf, a1 = -kInf, b0 = kInf, b1 = -kInf;
-  for (const detail::Vec2& q : points) {
+  for (const Vec2& q : points) {
     a0 = std::min(a0, u.dot(q));
     a1 = std::max(a1, u.dot(q));
     b0 = std::min(b0, v.dot(q));
@@ -185,9 +185,9 @@ detail::Triangle2 thin_triangle(const std::vector<detail::Vec2>& points, const d
   }
   const Real w = a1 - a0 + 2 * d;
   const Real h = b1 - b0 + 2 * d;
-  const detail::Vec2 origin = u * (a0 - d) + v * (b0 - d);
+  const Vec2 origin = u * (a0 - d) + v * (b0 - d);
   detail::Triangle2 t;
-  t.corners = {origin, detail::Vec2(origin + 2 * w * u), detail::Vec2(origin + 2 * h * v)};
+  t.corners = {origin, Vec2(origin + 2 * w * u), Vec2(origin + 2 * h * v)};
   return t;
 }
 
@@ -433,11 +433,11 @@ std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t coun
   const Vec3 a = principal.col(fixed);
   const Vec3 u = principal.col(fixed == 0 ? 1 : 0);
   const Vec3 v = principal.col(fixed == 0 ? 2 : 1);
-  std::vector<detail::Vec2> planar(count);
+  std::vector<Vec2> planar(count);
   Real w_lo = kInf, w_hi = -kInf, spread = 0, magnitude = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const Vec3 r = points[k] - centroid;
-    planar[k] = detail::Vec2(u.dot(r), v.dot(r));
+    planar[k] = Vec2(u.dot(r), v.dot(r));
     const Real w = a.dot(r);
     w_lo = std::min(w_lo, w);
     w_hi = std::max(w_hi, w);
@@ -492,8 +492,8 @@ std::optional<Prism> prism_enclosing_points(const Vec3* points, std::size_t coun
         longest = i;
       }
     }
-    const detail::Vec2 side = triangle.corners[(longest + 1) % 3] - triangle.corners[longest];
-    const detail::Vec2 direction = side.norm() > 0 ? detail::Vec2(side.normalized()) : detail::Vec2::UnitX();
+    const Vec2 side = triangle.corners[(longest + 1) % 3] - triangle.corners[longest];
+    const Vec2 direction = side.norm() > 0 ? Vec2(side.normalized()) : Vec2::UnitX();
     for (int step = 0; step < 60 && !done; ++step) {
       const Real d = std::ldexp(margin, step) + (step > 0 ? std::ldexp(kEpsilon, step) * spread : 0);
       best = build(thin_triangle(planar, direction, d), d);

@@ -19,7 +19,7 @@ namespace {
 
 BuildSettings terrain_settings() {
   BuildSettings settings;
-  settings.strategy = BuildStrategy::terrain;
+  settings.merge_rule = planar::terrain_merge_order;
   return settings;
 }
 

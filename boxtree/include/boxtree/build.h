@@ -3,7 +3,9 @@
 // Bottom-up construction (paper, Section 3): leaves are the facets; in each round a maximal set
 // of disjoint pairs of neighbouring nodes is merged, cheapest merged volume first, and unpaired
 // nodes are carried to the next round.
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "boxtree/tree.h"
 
@@ -26,21 +28,30 @@ enum class MergeCost { surface_area, volume };
 //    Hybrids: the upper boxes are the leaf volumes' exact bounding boxes. No effect on aabb (exact).
 enum class ParentFit { enclose_children, fit_facets };
 
-enum class BuildStrategy { greedy, terrain };
-
 // How the greedy builder ranks candidate pairs for the oriented kinds (axis-aligned boxes are
 // always ranked by their exact merged box, which is cheap):
 //  merged_volume (default): the paper's rule to the letter: every candidate's parent volume is
-//    fitted (PCA, minimum-area rectangle or triangle) and ranked by its cost; a fit per candidate,
-//    tens of microseconds per facet (100k-facet terrain: obb-min ~31 us/facet, pie-min ~100).
+//    fitted (PCA, minimum-area rectangle or triangle) and ranked by its cost; a fit per candidate.
 //  bounding_box: by the cost (BuildSettings::cost) of the axis-aligned box around both nodes, a
 //    cheap proxy of the merged volume's size, so the tree has the aabb build's shape; only the
-//    chosen pairs' parents are fitted (n - 1 fits, in the final layout). About 9x faster for
-//    obb-min (~3.6 us/facet), 8-12x for pie-min (~8-12 us/facet), but looser trees: the paper's
-//    Table 1 volume-test counts (bench/paper) grow by 5-8% for obb-* and 12-16% for pie-*
-//    (geometric mean over all pairs and gaps; up to +25% for obb, +40-70% for pie on the
-//    9996-facet spheres).
+//    chosen pairs' parents are fitted (n - 1 fits, in the final layout). A faster build, but
+//    looser trees (more volume tests per query). Earlier figures: bench/RESULTS.md, "Notes from
+//    earlier measurements".
 enum class PairRanking { merged_volume, bounding_box };
+
+// A tree's shape given from outside the greedy rounds: its parents in build order. Leaves
+// 0..n-1 are the facets; parent k (node n + k) merges nodes first[k] and second[k], both built
+// before it; every node but the last parent (the root) is merged exactly once, so each vector
+// holds n - 1 entries. An order that breaks this is a programmer error (asserted).
+struct MergeOrder {
+  std::vector<std::uint32_t> first;
+  std::vector<std::uint32_t> second;
+  int rounds = 0;                   // reported as BuildStats::rounds
+  std::size_t candidate_pairs = 0;  // reported as BuildStats::candidate_pairs
+};
+// The merge order for a mesh, called by build_tree after validating it; throws boxtree::Error
+// for a mesh it does not apply to.
+using MergeRule = MergeOrder (*)(const TriangleMesh& mesh);
 
 struct BuildSettings {
   MergeCost cost = MergeCost::surface_area;
@@ -57,11 +68,11 @@ struct BuildSettings {
   int hybrid_level = 0;
   ParentFit parent_fit = ParentFit::enclose_children;
   PairRanking ranking = PairRanking::merged_volume;
-  // Which pairs are merged: greedy (the default, above) or terrain, the paper's Section 3.1 rule
-  // (planar/terrain.h: Section 2's pairing of the vertical projection, for a terrain whose facets'
-  // projected bounding rectangles tile the plane, such as make_terrain; throws otherwise; parents
-  // always enclose their children, cost/near_window/max_neighbors/parent_fit do not apply).
-  BuildStrategy strategy = BuildStrategy::greedy;
+  // Which pairs are merged: the greedy rounds above (nullptr, the default), or the merge order a
+  // rule gives (MergeRule below), such as planar::terrain_merge_order, the paper's Section 3.1
+  // rule (planar/terrain.h). With a rule, parents always enclose their children and
+  // cost/near_window/max_neighbors/parent_fit/ranking do not apply.
+  MergeRule merge_rule = nullptr;
 };
 
 struct BuildStats {

@@ -8,14 +8,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>  // cross products and rotations, used throughout
+#include "boxtree/math.h"
 
 namespace boxtree {
 
-using Real = double;
-using Vec3 = Eigen::Matrix<Real, 3, 1>;
-using Mat3 = Eigen::Matrix<Real, 3, 3>;
 using FacetId = std::uint32_t;
 using VertexId = std::uint32_t;
 using Triangle = std::array<VertexId, 3>;

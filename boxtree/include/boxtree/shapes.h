@@ -6,7 +6,8 @@
 #include <cmath>
 #include <limits>
 
-#include "boxtree/mesh.h"
+#include "boxtree/math.h"
+#include "boxtree/mesh.h"  // not used here; kept for the files that take FacetId and TriangleMesh from here
 
 namespace boxtree {
 
@@ -75,15 +76,5 @@ inline bool is_valid(const Obb& box) {
 inline bool is_valid(const Plane& plane) {
   return plane.normal.allFinite() && !plane.normal.isZero(0) && std::isfinite(plane.offset);
 }
-
-// x_a = rotation * x_b + translation. Used as `a_from_b` in tree-vs-tree queries.
-struct RigidTransform {
-  Mat3 rotation = Mat3::Identity();
-  Vec3 translation = Vec3::Zero();
-
-  Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
-  RigidTransform inverse() const { return {rotation.transpose(), -(rotation.transpose() * translation)}; }
-  static RigidTransform identity() { return {}; }
-};
 
 }  // namespace boxtree

@@ -3,11 +3,8 @@
 #include "boxtree/planar/terrain.h"
 
 #include <algorithm>
-#include <chrono>
 #include <numeric>
 
-#include "../internal.h"
-#include "boxtree/detail/volume_kinds.h"
 #include "boxtree/error.h"
 #include "boxtree/planar/partition.h"
 #include "boxtree/planar/planar_tree.h"
@@ -46,29 +43,18 @@ TerrainCells terrain_cells(const TriangleMesh& mesh) {
   return out;
 }
 
-template <class Volume>
-Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, BuildStats* stats) {
-  const auto start = std::chrono::steady_clock::now();
-  if (!mesh_ptr) throw Error("build_tree: no mesh given");
-  const TriangleMesh& mesh = *mesh_ptr;
-  validate_mesh(mesh);
+MergeOrder terrain_merge_order(const TriangleMesh& mesh) {
   const std::size_t n = mesh.facet_count();
-  if (n > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
   const TerrainCells cells = terrain_cells(mesh);
-
   // Build order: leaves 0..n-1 are the facets; parents are appended.
-  std::vector<Volume> volumes;
-  std::vector<std::uint32_t> first(n, 0), second(n, 0);
-  std::vector<int> heights(n, 0);
-  volumes.reserve(2 * n - 1);
-  for (FacetId f = 0; f < n; ++f)
-    volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  MergeOrder order;
+  order.first.reserve(n - 1);
+  order.second.reserve(n - 1);
+  std::uint32_t next_parent = std::uint32_t(n);
   auto merge = [&](std::uint32_t a, std::uint32_t b) {
-    volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
-    first.push_back(a);
-    second.push_back(b);
-    heights.push_back(1 + std::max(heights[a], heights[b]));
-    return std::uint32_t(volumes.size() - 1);
+    order.first.push_back(a);
+    order.second.push_back(b);
+    return next_parent++;
   };
 
   // 1. The facets of one cell (two triangles of a grid square) are merged first, in pairs.
@@ -93,24 +79,10 @@ Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, Bu
   const std::size_t cell_count = cells.cells.size();
   for (std::size_t i = 0; i < merges.size(); ++i)
     planar_node[cell_count + i] = merge(planar_node[merges[i].first], planar_node[merges[i].second]);
-  const std::uint32_t root = merges.empty() ? planar_node[0] : planar_node[cell_count + merges.size() - 1];
-  BOXTREE_ASSERT(volumes.size() == 2 * n - 1, "a binary tree over n leaves has 2n-1 nodes");
 
-  std::vector<Volume> out_volumes;
-  std::vector<std::uint32_t> out_links;
-  detail::depth_first_layout(volumes, first, second, root, n, Tree<Volume>::kLeafFlag, out_volumes, out_links);
-  const int height = heights[root];
-  if (stats) {
-    stats->rounds = int(planar_stats.rounds.size());
-    stats->candidate_pairs = 0;
-    for (const PlanarRoundStats& r : planar_stats.rounds) stats->candidate_pairs += r.offers;
-    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
-  return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), height);
+  order.rounds = int(planar_stats.rounds.size());
+  for (const PlanarRoundStats& r : planar_stats.rounds) order.candidate_pairs += r.offers;
+  return order;
 }
-
-#define BOXTREE_INSTANTIATE_TERRAIN(V) \
-  template Tree<V> build_terrain_tree<V>(std::shared_ptr<const TriangleMesh>, BuildStats*);
-BOXTREE_FOR_EACH_VOLUME(BOXTREE_INSTANTIATE_TERRAIN)
 
 }  // namespace boxtree::planar

@@ -18,8 +18,6 @@
 
 namespace boxtree::detail {
 
-using Vec2 = Eigen::Matrix<Real, 2, 1>;
-
 // Eigenvectors of the covariance matrix of `points` (about their centroid), as the columns of a
 // rotation matrix ordered by decreasing eigenvalue: col(0) = max principal component, col(2) =
 // min. Deterministic: the largest-magnitude component of col(0) and of col(1) is positive (the

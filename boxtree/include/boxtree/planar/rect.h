@@ -5,13 +5,10 @@
 // coordinates only (no arithmetic), so every test on them is exact.
 #include <cstdint>
 
-#include <Eigen/Core>
-
-#include "boxtree/mesh.h"  // Real
+#include "boxtree/math.h"  // Real, Vec2
 
 namespace boxtree::planar {
 
-using Vec2 = Eigen::Matrix<Real, 2, 1>;
 using RectId = std::uint32_t;
 
 struct Rect {

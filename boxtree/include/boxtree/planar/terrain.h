@@ -7,13 +7,11 @@
 // enclosing its children. For axis-aligned boxes that lift is exactly the smallest box enclosing
 // both children; other volume kinds are fitted to the same topology with their own parent rule.
 //
-// Selected through BuildSettings::strategy = BuildStrategy::terrain (build.h); callable directly.
-#include <memory>
+// Selected through BuildSettings::merge_rule = planar::terrain_merge_order (build.h).
 #include <vector>
 
 #include "boxtree/build.h"
 #include "boxtree/planar/rect.h"
-#include "boxtree/tree.h"
 
 namespace boxtree::planar {
 
@@ -27,9 +25,9 @@ struct TerrainCells {
 };
 TerrainCells terrain_cells(const TriangleMesh& mesh);
 
-// Validates the mesh (validate_mesh) and its cells, then builds the tree by the terrain rule.
-// Deterministic. stats->rounds counts the planar pairing rounds.
-template <class Volume>
-Tree<Volume> build_terrain_tree(std::shared_ptr<const TriangleMesh> mesh, BuildStats* stats = nullptr);
+// The terrain rule's merge order (a MergeRule, build.h) for a valid mesh: the facets of each cell
+// merged in pairs, then the cells by the planar pairing (planar_tree.h). Throws as terrain_cells.
+// Deterministic. rounds counts the planar pairing rounds, candidate_pairs their offers.
+MergeOrder terrain_merge_order(const TriangleMesh& mesh);
 
 }  // namespace boxtree::planar
