@@ -174,7 +174,8 @@ struct RockResult {
 };
 
 RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const std::string& method, int rocks,
-                     int steps, std::uint64_t seed) {
+                     int steps, std::uint64_t seed,
+                     boxtree::MeshContactPolicy policy = boxtree::bullet::AlgorithmSettings{}.meshContacts) {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher(&config);
   btDbvtBroadphase broadphase;
@@ -182,7 +183,9 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
   TimedWorld world(&dispatcher, &broadphase, &solver, &config);
   world.setGravity(btVector3(0, 0, -9.81f));
   if (boxtree) {
-    boxtree::bullet::registerBoxtreeAlgorithms(&dispatcher);
+    boxtree::bullet::AlgorithmSettings settings;
+    settings.meshContacts = policy;
+    boxtree::bullet::registerBoxtreeAlgorithms(&dispatcher, settings);
   } else {
     btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher);
   }
@@ -270,6 +273,9 @@ int main(int argc, char** argv) {
   int rocks = 20;
   app.add_option("--rocks", rocks, "closed meshes dropped for the mesh-vs-mesh scene (0: skip)")
       ->check(CLI::Range(0, 10000));
+  std::string mesh_contacts;
+  app.add_option("--mesh-contacts", mesh_contacts, "boxtree's mesh-vs-mesh contacts: triangle-pairs or face-normals")
+      ->check(CLI::IsMember({"triangle-pairs", "face-normals"}));
   CLI11_PARSE(app, argc, argv);
 
   btSetCustomEnterProfileZoneFunc(enter_zone);
@@ -297,7 +303,11 @@ int main(int argc, char** argv) {
                 boxtree::make_bumpy_sphere(10, 6, 0.3, 0).facet_count(), small.facet_count(), steps);
     std::printf("%-34s %12s %10s %16s %8s\n", "pair", "collide ms", "contacts", "max final speed", "fell");
     const RockResult g = run_rocks(false, small, method, rocks, steps, seed);
-    const RockResult b = run_rocks(true, small, method, rocks, steps, seed);
+    boxtree::MeshContactPolicy policy = boxtree::bullet::AlgorithmSettings{}.meshContacts;
+    if (!mesh_contacts.empty())
+      policy = mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
+                                               : boxtree::MeshContactPolicy::triangle_pairs;
+    const RockResult b = run_rocks(true, small, method, rocks, steps, seed, policy);
     std::printf("%-34s %12.3f %10.1f %16.3f %8d\n", "bullet GImpact rocks on bvh", g.collision_ms_per_step,
                 g.contacts_per_step, g.final_speed, g.below_terrain);
     std::printf("%-34s %12.3f %10.1f %16.3f %8d\n", "boxtree rocks on boxtree", b.collision_ms_per_step,

@@ -61,6 +61,7 @@ struct Options {
   std::string json_path;
   int overlay_level = -1;
   bool soak = false;
+  std::string mesh_contacts;
 };
 
 constexpr Real kTimeStep = 1.0 / 60;
@@ -120,6 +121,7 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
   sim_options.boxtree_midphase = midphase == "boxtree";
   sim_options.method = o.method;
   sim_options.seed = o.seed;
+  sim_options.mesh_contacts = o.mesh_contacts;
   auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
   constexpr Real kAllowance = 0.05;  // as in the simulation summary
   const TerrainProbe& probe = *scene.probe;
@@ -212,6 +214,7 @@ int run_simulation(const Options& o, const TerrainOptions& terrain_options) {
   sim_options.boxtree_midphase = midphase == "boxtree";
   sim_options.method = o.method;
   sim_options.seed = o.seed;
+  sim_options.mesh_contacts = o.mesh_contacts;
   auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
   const double setup_seconds = seconds_since(start);
 
@@ -364,6 +367,10 @@ int main(int argc, char** argv) {
   app.add_option("--method", o.method,
                  "Hierarchy method of the boxtree midphase and of the overlay (see `boxtree --help`)")
       ->capture_default_str();
+  app.add_option("--mesh-contacts", o.mesh_contacts,
+                 "Mesh-vs-mesh contacts of the boxtree midphase: triangle-pairs or face-normals [default: the "
+                 "adapter's]")
+      ->check(CLI::IsMember({"triangle-pairs", "face-normals"}));
   app.add_option("--bodies", o.bodies, "Number of bodies dropped")->check(CLI::Range(0, 100000))->capture_default_str();
   app.add_option("--terrain-size", o.terrain_size, "Terrain grid cells per side (2 x size^2 facets)")
       ->check(CLI::Range(2, 4096))

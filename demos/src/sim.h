@@ -21,6 +21,9 @@ struct SimOptions {
   // 16.0 and 10.0 triangles per call with 8, 24.0 and 15.7 with 64); boxtree's visit them all and
   // keep the best. 1 to 64.
   int max_contacts_per_pair = 8;
+  // Mesh-vs-mesh contact policy of the boxtree adapters (boxtree/collider.h): "triangle-pairs",
+  // "face-normals", or empty for each adapter's default.
+  std::string mesh_contacts;
 };
 
 class Simulation {

@@ -90,7 +90,13 @@ class BulletSimulation final : public Simulation {
     dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
     // Before any body exists: Bullet caches an algorithm per overlapping pair.
 #if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
-    if (boxtree_) boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get());
+    if (boxtree_) {
+      boxtree::bullet::AlgorithmSettings settings;
+      if (!options.mesh_contacts.empty())
+        settings.meshContacts = options.mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
+                                                                         : boxtree::MeshContactPolicy::triangle_pairs;
+      boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get(), settings);
+    }
 #endif
     if (!boxtree_) btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher_.get());
     broadphase_ = std::make_unique<btDbvtBroadphase>();

@@ -44,7 +44,9 @@ struct OdeConvexData {
 class OdeSimulation final : public Simulation {
  public:
   OdeSimulation(const Scene& scene, const SimOptions& options)
-      : boxtree_(options.boxtree_midphase), max_contacts_(options.max_contacts_per_pair) {
+      : boxtree_(options.boxtree_midphase),
+        max_contacts_(options.max_contacts_per_pair),
+        mesh_contacts_(options.mesh_contacts) {
     if (max_contacts_ < 1 || max_contacts_ > kContactBuffer)
       throw boxtree::Error("max_contacts_per_pair must be 1 to " + std::to_string(kContactBuffer));
 #if !BOXTREE_DEMO_HAVE_ODE_ADAPTER
@@ -209,6 +211,12 @@ class OdeSimulation final : public Simulation {
     if (boxtree_) {
 #if BOXTREE_DEMO_HAVE_ODE_ADAPTER
       dGeomID geom = dCreateBoxtreeMesh(space_, mesh, method.c_str());
+      if (!mesh_contacts_.empty()) {
+        boxtree::ode::GeomSettings settings = boxtree::ode::geom_settings(geom);
+        settings.mesh_contacts = mesh_contacts_ == "face-normals" ? boxtree::MeshContactPolicy::face_normals
+                                                                  : boxtree::MeshContactPolicy::triangle_pairs;
+        boxtree::ode::set_geom_settings(geom, settings);
+      }
       mesh_geoms_.push_back(geom);
       return geom;
 #endif
@@ -319,6 +327,7 @@ class OdeSimulation final : public Simulation {
 
   bool boxtree_;
   int max_contacts_;
+  std::string mesh_contacts_;  // SimOptions::mesh_contacts
   std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
   PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;
