@@ -94,7 +94,7 @@ class BulletSimulation final : public Simulation {
       boxtree::bullet::AlgorithmSettings settings;
       if (!options.mesh_contacts.empty())
         settings.meshContacts = options.mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
-                                                                         : boxtree::MeshContactPolicy::triangle_pairs;
+                                                                        : boxtree::MeshContactPolicy::triangle_pairs;
       boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get(), settings);
     }
 #endif

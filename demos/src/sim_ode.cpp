@@ -327,7 +327,7 @@ class OdeSimulation final : public Simulation {
 
   bool boxtree_;
   int max_contacts_;
-  std::string mesh_contacts_;  // SimOptions::mesh_contacts
+  std::string mesh_contacts_;                    // SimOptions::mesh_contacts
   std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
   PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;

@@ -82,9 +82,7 @@ struct GeomSettings {
   // over the seams of a mesh without bumps. Edges folding convexly by more than 10 degrees stay.
   bool internal_edges = true;
   // How two meshes' intersecting facet pairs become contacts (boxtree/collider.h). Face normals
-  // (the default, as in the Bullet adapter): on the demo's drop scene (seeds 1-3, 300 bodies, 32
-  // of them closed meshes) no body ended below the terrain and the deepest mesh body rested 0.5 cm
-  // in; with triangle_pairs 8-11 mesh bodies ended 14-18 cm in (tests/reliability/README.md).
+  // by default, as in the Bullet adapter: chosen by measurement (bench/results/mesh_contacts.txt).
   MeshContactPolicy mesh_contacts = MeshContactPolicy::face_normals;
 };
 
