@@ -50,6 +50,17 @@ std::shared_ptr<const TriangleMesh> box_mesh(const Vec3& half) {
 Vec3 normal_of(const dContactGeom& c) { return Vec3(c.normal[0], c.normal[1], c.normal[2]); }
 Vec3 pos_of(const dContactGeom& c) { return Vec3(c.pos[0], c.pos[1], c.pos[2]); }
 
+// A geom's placement: x_world = rotation * x_geom + translation.
+RigidTransform pose_of_geom(dGeomID g) {
+  const dReal* p = dGeomGetPosition(g);
+  const dReal* r = dGeomGetRotation(g);  // 3 rows of 4
+  RigidTransform pose;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) pose.rotation(row, col) = r[row * 4 + col];
+  pose.translation = Vec3(p[0], p[1], p[2]);
+  return pose;
+}
+
 int collide(dGeomID a, dGeomID b, std::vector<dContactGeom>& out, int max = 32, int flags_extra = 0) {
   out.assign(std::size_t(max), dContactGeom{});
   const int n = dCollide(a, b, max | flags_extra, out.data(), sizeof(dContactGeom));
@@ -834,6 +845,53 @@ TEST(OdeGeom, ConvexRegistrationOfAPlainConvexGeom) {
   EXPECT_EQ(boxtree::ode::geom_counters(mesh).convexes_read_from_ode, 2u);  // registered now
   EXPECT_THROW(boxtree::ode::set_convex_points(mesh, points, 8), Error);    // not a dConvex
   for (dGeomID c : {with_faces, points_only}) boxtree::ode::forget_convex(c);
+}
+
+// The colliders only convert: dCollide's contacts are the core collider's on the same input (the
+// box in the mesh's frame, the geom's settings as the request), in the world and ODE's convention
+// (normal from the box into the mesh, depth >= 0).
+TEST(OdeGeom, ContactsAreTheCollidersContacts) {
+  Space space;
+  const auto terrain = std::make_shared<const TriangleMesh>(make_terrain(12, 12, 3, 12, 1));
+  dGeomID mesh = dCreateBoxtreeMesh(space.id, terrain, "aabb");
+  dMatrix3 turn;
+  dRFromAxisAndAngle(turn, 0, 0, 1, 0.3);
+  dGeomSetRotation(mesh, turn);
+  dGeomSetPosition(mesh, 1, 2, 0.5);
+  dGeomID box = dCreateBox(space.id, 1.2, 0.8, 0.6);
+  dRFromAxisAndAngle(turn, 1, 0.2, 0, 0.5);
+  dGeomSetRotation(box, turn);
+  int compared = 0;
+  for (int i = 0; i < 12; ++i) {
+    dGeomSetPosition(box, 3 + 0.5 * i, 5 + 0.3 * i, 1.1 + 0.05 * (i % 4));
+    std::vector<dContactGeom> got;
+    const int n = collide(mesh, box, got, 8);
+    // The same in the core: the box in the mesh's frame.
+    const RigidTransform world_from_mesh = pose_of_geom(mesh);
+    const RigidTransform world_from_box = pose_of_geom(box);
+    const Mat3 r = world_from_mesh.rotation.transpose();
+    const Obb in_mesh{r * (world_from_box.translation - world_from_mesh.translation), r * world_from_box.rotation,
+                      Vec3(0.6, 0.4, 0.3)};
+    const boxtree::ode::GeomSettings settings = boxtree::ode::geom_settings(mesh);
+    ContactRequest request;
+    request.margin = settings.margin;
+    request.two_sided = settings.two_sided;
+    request.internal_edges = settings.internal_edges;
+    request.max_contacts = 8;
+    request.merge_distance = settings.merge_fraction * in_mesh.half_extents.norm();
+    ContactResult want;
+    collide_convex(*boxtree::ode::geom_collision_mesh(mesh), in_mesh, request, want);
+    ASSERT_EQ(std::size_t(n), want.contacts.size()) << "pose " << i;
+    for (int k = 0; k < n; ++k) {
+      const ContactPoint& c = want.contacts[std::size_t(k)];
+      EXPECT_LT((pos_of(got[std::size_t(k)]) - world_from_mesh.apply(c.position)).norm(), 1e-12);
+      EXPECT_LT((normal_of(got[std::size_t(k)]) + world_from_mesh.rotation * c.normal).norm(), 1e-12);
+      EXPECT_NEAR(got[std::size_t(k)].depth, std::max(c.depth, 0.0), 1e-12);
+      EXPECT_EQ(got[std::size_t(k)].side1, int(c.facet));
+    }
+    compared += n;
+  }
+  EXPECT_GT(compared, 12);
 }
 
 // ODE's registration does not survive dCloseODE: close, re-init, register again, collide.
