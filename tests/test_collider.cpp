@@ -514,5 +514,49 @@ TEST(Collider, InvalidShapesAndPosesGiveNothing) {
   EXPECT_TRUE(result.counts.invalid_input);
 }
 
+// ray_hits: every hit of brute force, nearest first; closest_only the first of them; first_only
+// one of them; culling keeps the front-facing ones.
+TEST(Collider, RayHitsAreBruteForcesHits) {
+  const auto mesh = CollisionMesh::build(std::make_shared<TriangleMesh>(make_bumpy_sphere(24, 12, 0.2, 5)), Method{});
+  Random random(9);
+  std::size_t total = 0;
+  for (int trial = 0; trial < test::scaled(200); ++trial) {
+    // From outside towards the middle, some ending inside the mesh.
+    const Vec3 from = random.unit_vector() * 3;
+    const Ray ray{from, (random.point(-0.5, 0.5) - from).normalized(), 0, random.uniform(1.5, 6)};
+    const auto want = test::brute_ray_all_hits(mesh->mesh(), ray);
+    std::vector<FacetHit> all, closest, first, front;
+    ray_hits(*mesh, ray, {}, all);
+    ASSERT_EQ(all.size(), want.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < all.size(); ++i) EXPECT_NEAR(all[i].t, want[i].t, 1e-12);
+    for (std::size_t i = 1; i < all.size(); ++i) EXPECT_LE(all[i - 1].t, all[i].t);
+    RayHitsRequest request;
+    request.closest_only = true;
+    ray_hits(*mesh, ray, request, closest);
+    request = {};
+    request.first_only = true;
+    ray_hits(*mesh, ray, request, first);
+    request = {};
+    request.cull_back_faces = true;
+    ray_hits(*mesh, ray, request, front);
+    ASSERT_EQ(closest.size(), std::min<std::size_t>(all.size(), 1));
+    ASSERT_EQ(first.size(), std::min<std::size_t>(all.size(), 1));
+    if (!all.empty()) {
+      EXPECT_EQ(closest[0].t, all[0].t);
+      EXPECT_TRUE(std::any_of(all.begin(), all.end(), [&](const FacetHit& h) { return h.facet == first[0].facet; }));
+    }
+    std::size_t entering = 0;
+    for (const FacetHit& h : all) {
+      const TriangleMesh& m = mesh->mesh();
+      entering += (m.corner(h.facet, 1) - m.corner(h.facet, 0))
+                      .cross(m.corner(h.facet, 2) - m.corner(h.facet, 0))
+                      .dot(ray.direction) < 0;
+    }
+    EXPECT_EQ(front.size(), entering);
+    total += all.size();
+  }
+  EXPECT_GT(total, 100u);
+}
+
 }  // namespace
 }  // namespace boxtree

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "boxtree/active_edges.h"
+#include "boxtree/geometry.h"
 #include "internal.h"
 
 namespace boxtree {
@@ -302,6 +303,70 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
         return o.two_sided ? n : apply_front(shape, a, b, c, out, n);
       });
   reduce(request, result);
+}
+
+std::size_t ray_hits(const CollisionMesh& mesh, const Ray& ray, const RayHitsRequest& request,
+                     std::vector<FacetHit>& hits) {
+  hits.clear();
+  const TriangleMesh& m = mesh.mesh();
+  std::size_t candidates = 0;
+  mesh.tree().ray_candidates(ray, [&](FacetId facet, Real t_max) -> Real {
+    ++candidates;
+    const Vec3& a = m.corner(facet, 0);
+    const Vec3& b = m.corner(facet, 1);
+    const Vec3& c = m.corner(facet, 2);
+    Ray bounded = ray;
+    bounded.t_max = t_max;
+    TriangleHit hit;
+    if (!intersect_ray_triangle(bounded, a, b, c, hit)) return t_max;
+    // Front faces are those the ray enters against their counter-clockwise normal.
+    if (request.cull_back_faces && (b - a).cross(c - a).dot(ray.direction) >= 0) return t_max;
+    if (request.closest_only) {
+      if (hits.empty() || hit.t < hits[0].t || (hit.t == hits[0].t && facet < hits[0].facet))
+        hits.assign(1, {hit.t, facet});
+      return hit.t;
+    }
+    hits.push_back({hit.t, facet});
+    if (request.first_only) return Real(-1);  // below t_min: stops the walk
+    return t_max;
+  });
+  std::sort(hits.begin(), hits.end(),
+            [](const FacetHit& x, const FacetHit& y) { return x.t != y.t ? x.t < y.t : x.facet < y.facet; });
+  return candidates;
+}
+
+std::size_t sweep_candidates(const CollisionMesh& mesh, const Vec3& from, const Vec3& to, const Vec3& half,
+                             FunctionRef<Real()> hit_fraction, FunctionRef<void(FacetId)> visit) {
+  const Vec3 motion = to - from;
+  const Real length = motion.norm();
+  if (!from.allFinite() || !to.allFinite() || !half.allFinite() || !(half.array() >= 0).all()) return 0;
+  thread_local std::vector<std::pair<Real, FacetId>> candidates;
+  candidates.clear();
+  const Vec3 axis = length > 0 ? Vec3(motion / length) : Vec3::UnitX();
+  const TriangleMesh& m = mesh.mesh();
+  auto collect = [&](FacetId f) {
+    Real start = std::numeric_limits<Real>::infinity();
+    for (int k = 0; k < 3; ++k) start = std::min(start, (m.corner(f, k) - from).dot(axis));
+    candidates.emplace_back(start, f);
+    return true;
+  };
+  if (length > 0) {
+    mesh.tree().query_overlap(swept_box(from, to, half), collect);
+  } else {
+    mesh.tree().query_overlap(Obb{from, Mat3::Identity(), half}, collect);
+  }
+  // Nearest first: the box's leading face reaches a facet starting at distance s along the motion
+  // no earlier than fraction (s - reach) / length; once that exceeds the engine's closest hit, no
+  // later candidate can be hit earlier.
+  std::sort(candidates.begin(), candidates.end());
+  const Real reach = axis.cwiseAbs().dot(half);
+  std::size_t visited = 0;
+  for (const auto& [start, f] : candidates) {
+    if (length > 0 && (start - reach) / length > hit_fraction()) break;
+    visit(f);
+    ++visited;
+  }
+  return visited;
 }
 
 void collide_half_space(const CollisionMesh& mesh, const Plane& plane, const ContactRequest& request,

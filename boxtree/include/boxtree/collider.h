@@ -133,6 +133,31 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
 void collide_half_space(const CollisionMesh& mesh, const Plane& plane, const ContactRequest& request,
                         ContactResult& result);
 
+// ---- rays and sweeps, as engines ask for them ----
+
+// Which hits of a ray an engine wants (ODE's dGeomRaySetParams / dGeomRaySetClosestHit).
+struct RayHitsRequest {
+  bool closest_only = false;     // just the nearest hit (ties: the smaller facet id)
+  bool first_only = false;       // any one hit, the walk stops at it
+  bool cull_back_faces = false;  // only facets the ray enters through their front
+};
+struct FacetHit {
+  Real t = 0;  // in units of |ray.direction|
+  FacetId facet = 0;
+};
+// The ray's hits with the mesh's facets (intersect_ray_triangle, geometry.h) in `hits`, nearest
+// first (ties: the smaller facet id). Returns how many facets were tested.
+std::size_t ray_hits(const CollisionMesh& mesh, const Ray& ray, const RayHitsRequest& request,
+                     std::vector<FacetHit>& hits);
+
+// The facets an axis-aligned box of half extents `half` (mesh frame) can touch while its centre
+// moves from `from` to `to` (the box swept along the motion, as an oriented box), nearest first:
+// `visit` gets each one until the box's leading face could not reach the next before
+// `hit_fraction()` (the engine's closest hit so far, as a fraction of the motion; re-read after
+// every visit). Returns how many facets were visited.
+std::size_t sweep_candidates(const CollisionMesh& mesh, const Vec3& from, const Vec3& to, const Vec3& half,
+                             FunctionRef<Real()> hit_fraction, FunctionRef<void(FacetId)> visit);
+
 // ---- mesh vs mesh ----
 
 // How a pair of intersecting facets becomes contacts.

@@ -333,38 +333,8 @@ void BoxtreeMeshShape::sweepCandidates(btTriangleConvexcastCallback& cast, Funct
   const Vec3 c0 = to_vec((lo0 + hi0) * btScalar(0.5)), c1 = to_vec((lo1 + hi1) * btScalar(0.5));
   const Vec3 half = to_vec((hi0 - lo0) * btScalar(0.5)).cwiseMax(to_vec((hi1 - lo1) * btScalar(0.5))) +
                     Vec3::Constant(Real(cast.m_triangleCollisionMargin));
-  const Vec3 motion = c1 - c0;
-  const Real length = motion.norm();
-  if (!(length == length) || !half.allFinite() || !c0.allFinite()) return;
-
-  // Candidates: triangles meeting the region the box sweeps, bounded tightly by an oriented box
-  // along the motion.
-  std::vector<std::pair<Real, FacetId>> candidates;
-  const Vec3 axis = length > 0 ? Vec3(motion / length) : Vec3::UnitX();
-  const TriangleMesh& m = m_collision->mesh();
-  auto collect = [&](FacetId f) {
-    Real start = std::numeric_limits<Real>::infinity();
-    for (int k = 0; k < 3; ++k) start = std::min(start, (m.corner(f, k) - c0).dot(axis));
-    candidates.emplace_back(start, f);
-    return true;
-  };
-  if (length > 0) {
-    m_collision->tree().query_overlap(swept_box(c0, c1, half), collect);
-  } else {
-    const Aabb box = toTreeFrame(to_bt(c0 - half), to_bt(c0 + half));
-    if (box.is_empty()) return;
-    m_collision->tree().query_overlap(box, collect);
-  }
-
-  // Nearest first: the box's leading face reaches a triangle starting at distance s along the
-  // motion no earlier than fraction (s - reach) / length; once that exceeds the callback's
-  // closest hit, no later candidate can be hit earlier.
-  std::sort(candidates.begin(), candidates.end());
-  const Real reach = axis.cwiseAbs().dot(half);
-  for (const auto& [start, f] : candidates) {
-    if (length > 0 && (start - reach) / length > Real(cast.m_hitFraction)) break;
-    report(f);
-  }
+  sweep_candidates(
+      *m_collision, c0, c1, half, [&] { return Real(cast.m_hitFraction); }, report);
 }
 
 }  // namespace boxtree::bullet

@@ -188,45 +188,17 @@ int collide_ray(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int sk
   ray.direction = mesh_from_world.rotation * world_direction;
   ray.t_min = 0;
   ray.t_max = dGeomRayGetLength(o2);
-  const bool first_contact = dGeomRayGetFirstContact(o2) != 0;
-  const bool backface_cull = dGeomRayGetBackfaceCull(o2) != 0;
-  const bool closest_hit = dGeomRayGetClosestHit(o2) != 0;
+  RayHitsRequest request;
+  request.first_only = dGeomRayGetFirstContact(o2) != 0;
+  request.cull_back_faces = dGeomRayGetBackfaceCull(o2) != 0;
+  request.closest_only = dGeomRayGetClosestHit(o2) != 0;
   const TriangleMesh& mesh = object.mesh->mesh();
-
-  struct Hit {
-    Real t;
-    FacetId facet;
-  };
-  thread_local std::vector<Hit> hits;
-  hits.clear();
-  std::uint64_t candidates = 0;
-  object.mesh->tree().ray_candidates(ray, [&](FacetId facet, Real t_max) -> Real {
-    ++candidates;
-    const Vec3& a = mesh.corner(facet, 0);
-    const Vec3& b = mesh.corner(facet, 1);
-    const Vec3& c = mesh.corner(facet, 2);
-    Ray bounded = ray;
-    bounded.t_max = t_max;
-    TriangleHit hit;
-    if (!intersect_ray_triangle(bounded, a, b, c, hit)) return t_max;
-    // Culling keeps front faces only: those the ray enters against their CCW normal.
-    if (backface_cull && (b - a).cross(c - a).dot(ray.direction) >= 0) return t_max;
-    if (closest_hit) {
-      // Keep the nearer (on a tie the smaller facet id, as ray_closest_hit does).
-      if (hits.empty() || hit.t < hits[0].t || (hit.t == hits[0].t && facet < hits[0].facet))
-        hits.assign(1, {hit.t, facet});
-      return hit.t;
-    }
-    hits.push_back({hit.t, facet});
-    if (first_contact) return Real(-1);  // below t_min: stops the walk
-    return t_max;
-  });
+  thread_local std::vector<FacetHit> hits;
+  const std::size_t candidates = ray_hits(*object.mesh, ray, request, hits);
   object.calls.fetch_add(1, std::memory_order_relaxed);
   object.candidate_facets.fetch_add(candidates, std::memory_order_relaxed);
-  std::sort(hits.begin(), hits.end(),
-            [](const Hit& x, const Hit& y) { return x.t != y.t ? x.t < y.t : x.facet < y.facet; });
   int count = 0;
-  for (const Hit& hit : hits) {
+  for (const FacetHit& hit : hits) {
     if (count >= out.capacity()) break;
     const Vec3 a = world_from_mesh.apply(mesh.corner(hit.facet, 0));
     const Vec3 b = world_from_mesh.apply(mesh.corner(hit.facet, 1));
