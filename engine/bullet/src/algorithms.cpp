@@ -183,6 +183,15 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
           return collide_convex(target, Capsule{center - axis, center + axis, Real(capsule.getRadius())}, request,
                                 contacts);
         }
+        case CYLINDER_SHAPE_PROXYTYPE: {
+          // Bullet's cylinder (btCylinderShape, X or Z variants) with its margin inside its
+          // dimensions: the sharp cylinder of those dimensions.
+          const auto& cylinder = static_cast<const btCylinderShape&>(convex);
+          const int up = cylinder.getUpAxis();
+          const Vec3 axis = basis.col(up) * Real(cylinder.getHalfExtentsWithMargin()[up]);
+          return collide_convex(target, Cylinder{center - axis, center + axis, Real(cylinder.getRadius())}, request,
+                                contacts);
+        }
         default:
           break;
       }

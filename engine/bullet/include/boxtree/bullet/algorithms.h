@@ -4,7 +4,8 @@
 // the other body into the mesh's frame, call the core collider (boxtree/collider.h: the tree
 // query with the body's tight volume, the per-facet narrowphase, one-sided facets, internal
 // edges, the reduction to the manifold's 4 points) and hand its contacts to the manifold:
-//  - convex body vs boxtree mesh: spheres, boxes and capsules by the core's analytic routines,
+//  - convex body vs boxtree mesh: spheres, boxes, capsules and cylinders by the core's analytic
+//    routines,
 //    hulls with faces (hullFaces) by its separating axes, every other convex shape by Bullet's
 //    own per-triangle GJK/EPA inside the collider's pipeline;
 //  - boxtree mesh vs boxtree mesh (Bullet itself has nothing for concave vs concave): the
@@ -20,7 +21,7 @@
 namespace boxtree::bullet {
 
 struct AlgorithmSettings {
-  // Convex vs mesh: the analytic routines for spheres, boxes and capsules (else Bullet's GJK for
+  // Convex vs mesh: the analytic routines for spheres, boxes, capsules and cylinders (else Bullet's GJK for
   // every candidate triangle, with the boxtree's tight-volume query still in front).
   bool analyticContacts = true;
   // Hulls whose faces Bullet has computed (btPolyhedralConvexShape::initializePolyhedralFeatures)
