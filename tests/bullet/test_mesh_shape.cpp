@@ -353,6 +353,11 @@ TEST(BulletMeshShape, ShapesShareOneBuiltTree) {
     EXPECT_EQ(s->activeEdges(), from_mesh.activeEdges());
   }
   EXPECT_NE(from_mesh.tree().get<ObbMin>(), tree.get<ObbMin>());
+  // One collision mesh (tree, edge data) for both: the second shape adds no per-facet memory.
+  EXPECT_EQ(&a.collisionMesh(), &b.collisionMesh());
+  EXPECT_NE(&a.collisionMesh(), &from_mesh.collisionMesh());
+  std::printf("collision mesh of %zu facets: %zu bytes, held once by both shapes\n", terrain->facet_count(),
+              a.collisionMesh().memory_bytes());
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> pos(0, 50), size(0.5, 5);
   for (int q = 0; q < 50; ++q) {

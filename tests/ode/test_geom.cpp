@@ -768,6 +768,10 @@ TEST(OdeGeom, GeomsShareOneBuiltTree) {
     EXPECT_EQ(&boxtree::ode::geom_tree(g)->mesh(), grid.get());
     EXPECT_EQ(dSpaceQuery(space.id, g), 1);
   }
+  // One collision mesh (tree, edge data) for both: the second geom adds no per-facet memory.
+  EXPECT_EQ(boxtree::ode::geom_collision_mesh(a), boxtree::ode::geom_collision_mesh(b));
+  std::printf("[ shared   ] collision mesh of %zu facets: %zu bytes, held once by both geoms\n",
+              grid->facet_count(), boxtree::ode::geom_collision_mesh(a)->memory_bytes());
   dGeomID sphere = dCreateSphere(space.id, 0.3);
   std::vector<dContactGeom> out;
   dGeomSetPosition(sphere, 10.7071, 0.2929, 0.25);
