@@ -139,6 +139,10 @@ def check_frames(demo, engine, midphase, out_dir):
     if summary["contacts_per_step"] <= 0:
         fail("no contacts were reported")
     deepest = max(summary["final_bodies"], key=lambda b: b["depth"])
+    # The demo's allowance (5 cm) is for every scene; on this one the deepest measured was 1.3 cm
+    # (Bullet's builtin midphase; boxtree 0.5 cm in Bullet, 1.1 cm in ODE, gcc build).
+    if deepest["depth"] > 0.025:
+        fail(f"a {deepest['shape']} ended {100 * deepest['depth']:.1f} cm in the terrain (allowed: 2.5 cm)")
     print(f"ok: {engine}/{midphase}: {len(images)} frames, all {summary['bodies']} bodies above the terrain "
           f"(deepest: a {deepest['shape']} {100 * deepest['depth']:.1f} cm in), "
           f"{summary['contacts_per_step']:.0f} contacts per step")
