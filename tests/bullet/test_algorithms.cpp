@@ -457,46 +457,6 @@ TEST(BulletAlgorithms, MeshMeshAlgorithmCanBeLeftOut) {
   }
 }
 
-// BoxtreeMeshShape::activeEdges: on a flat grid only the border is active; on a coarse UV sphere
-// (convex, its quads between two rings planar) exactly the diagonals inside the quads are inactive.
-// Checked against a reference that finds each edge's neighbour and compares the two facets' planes.
-TEST(BulletAlgorithms, ActiveEdgesOfAFlatGridAreOnlyItsBorder) {
-  const auto count_active = [](const std::vector<std::uint8_t>& edges) {
-    int n = 0;
-    for (auto a : edges) n += ((a >> 0) & 1) + ((a >> 1) & 1) + ((a >> 2) & 1);
-    return n;
-  };
-  const BoxtreeMeshShape floor(std::make_shared<TriangleMesh>(make_terrain(4, 4, 1, 4, 0)));
-  ASSERT_EQ(floor.activeEdges().size(), floor.mesh().facet_count());
-  EXPECT_EQ(count_active(floor.activeEdges()), 16);  // the 4 x 4 border edges
-
-  const BoxtreeMeshShape sphere(std::make_shared<TriangleMesh>(make_uv_sphere(8, 6, 1)));
-  const TriangleMesh& m = sphere.mesh();
-  const std::vector<std::uint8_t>& active = sphere.activeEdges();
-  ASSERT_EQ(active.size(), m.facet_count());
-  const auto unit_normal = [&](FacetId f) {
-    return (m.corner(f, 1) - m.corner(f, 0)).cross(m.corner(f, 2) - m.corner(f, 0)).normalized();
-  };
-  int coplanar_edges = 0;
-  for (FacetId f = 0; f < m.facet_count(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const VertexId u = m.triangles[f][k], v = m.triangles[f][(k + 1) % 3];
-      // The neighbour across edge (u, v) runs it the other way.
-      FacetId neighbour = f;
-      for (FacetId g = 0; g < m.facet_count(); ++g)
-        for (int j = 0; j < 3; ++j)
-          if (g != f && m.triangles[g][j] == v && m.triangles[g][(j + 1) % 3] == u) neighbour = g;
-      ASSERT_NE(neighbour, f) << "facet " << f << " edge " << k << ": the sphere is closed";
-      const bool coplanar = unit_normal(f).dot(unit_normal(neighbour)) > 1 - 1e-9;
-      coplanar_edges += coplanar;
-      EXPECT_EQ(((active[f] >> k) & 1) == 0, coplanar) << "facet " << f << " edge " << k;
-    }
-  }
-  // 4 bands of 8 planar quads, one diagonal each, seen from both of its facets.
-  EXPECT_EQ(coplanar_edges, 2 * 4 * 8);
-  EXPECT_EQ(3 * int(m.facet_count()) - count_active(active), 2 * 4 * 8);
-}
-
 // boxtreeAlgorithmMaxSize is at least an algorithm object (Bullet's base plus the manifold
 // pointer), and registration refuses a pool one pointer smaller and accepts one of that size.
 // (One pointer, not one byte: btPoolAllocator threads its free list through the elements, so an

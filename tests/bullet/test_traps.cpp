@@ -241,5 +241,24 @@ TEST(BulletTraps, AdapterContactsAreTheCollidersContacts) {
   expect_same_points(got, want, 1e-5);
 }
 
+// A mesh whose facets are wound both ways has no front: its shapes collide two-sided, and one line
+// on stderr says so, once per mesh.
+TEST(BulletTraps, InconsistentWindingIsTwoSidedAndSaidOnce) {
+  auto flipped = std::make_shared<TriangleMesh>(make_uv_sphere(16, 8, 1));
+  for (std::size_t f = 0; f < flipped->triangles.size(); f += 3)
+    std::swap(flipped->triangles[f][1], flipped->triangles[f][2]);
+  const AnyTree tree = AnyTree::build(flipped, Method{});
+  testing::internal::CaptureStderr();
+  const BoxtreeMeshShape first(tree), second(tree);
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("wound the same way"), std::string::npos) << said;
+  EXPECT_EQ(said.find("wound the same way"), said.rfind("wound the same way")) << "said more than once: " << said;
+  EXPECT_FALSE(first.collisionMesh().consistent_winding());
+  // A well-wound mesh says nothing.
+  testing::internal::CaptureStderr();
+  const BoxtreeMeshShape good(std::make_shared<const TriangleMesh>(make_uv_sphere(16, 8, 1)));
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
 }  // namespace
 }  // namespace boxtree::bullet::test

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -770,8 +771,8 @@ TEST(OdeGeom, GeomsShareOneBuiltTree) {
   }
   // One collision mesh (tree, edge data) for both: the second geom adds no per-facet memory.
   EXPECT_EQ(boxtree::ode::geom_collision_mesh(a), boxtree::ode::geom_collision_mesh(b));
-  std::printf("[ shared   ] collision mesh of %zu facets: %zu bytes, held once by both geoms\n",
-              grid->facet_count(), boxtree::ode::geom_collision_mesh(a)->memory_bytes());
+  std::printf("[ shared   ] collision mesh of %zu facets: %zu bytes, held once by both geoms\n", grid->facet_count(),
+              boxtree::ode::geom_collision_mesh(a)->memory_bytes());
   dGeomID sphere = dCreateSphere(space.id, 0.3);
   std::vector<dContactGeom> out;
   dGeomSetPosition(sphere, 10.7071, 0.2929, 0.25);
@@ -896,6 +897,38 @@ TEST(OdeGeom, ContactsAreTheCollidersContacts) {
     compared += n;
   }
   EXPECT_GT(compared, 12);
+}
+
+// A mesh whose facets are wound both ways has no front: its geoms collide two-sided, and ODE's
+// message handler is told once per mesh.
+std::vector<std::string> g_messages;
+void record_message(int, const char* format, va_list args) {
+  char text[1024];
+  std::vsnprintf(text, sizeof text, format, args);
+  g_messages.emplace_back(text);
+}
+
+TEST(OdeGeom, InconsistentWindingIsTwoSidedAndSaidOnce) {
+  auto flipped = std::make_shared<TriangleMesh>(make_uv_sphere(16, 8, 1));
+  for (std::size_t f = 0; f < flipped->triangles.size(); f += 3)
+    std::swap(flipped->triangles[f][1], flipped->triangles[f][2]);
+  const AnyTree tree = AnyTree::build(flipped, Method{});
+  Space space;
+  dMessageFunction* previous = dGetMessageHandler();
+  g_messages.clear();
+  dSetMessageHandler(&record_message);
+  dGeomID a = dCreateBoxtreeMesh(space.id, tree);
+  dCreateBoxtreeMesh(space.id, tree);
+  dSetMessageHandler(previous);
+  ASSERT_EQ(g_messages.size(), 1u);
+  EXPECT_NE(g_messages[0].find("wound the same way"), std::string::npos) << g_messages[0];
+  // One-sided is asked (the default), two-sided is what it gets: a ball inside the sphere touching
+  // it from behind is pushed further in (towards the middle), as a two-sided facet does.
+  dGeomID ball = dCreateSphere(space.id, 0.3);
+  dGeomSetPosition(ball, 0, 0, 0.8);
+  std::vector<dContactGeom> out;
+  ASSERT_GE(collide(a, ball, out), 1);
+  EXPECT_GT(normal_of(deepest(out)).z(), 0.9);  // ODE's normal: from the ball into the mesh, up
 }
 
 // ODE's registration does not survive dCloseODE: close, re-init, register again, collide.
