@@ -309,44 +309,112 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
 // The half-space {x : normal . x <= offset} (signed_distance_scaled(x) <= 0).
 using HalfSpace = Plane;
 
+// One face of a Polytope: its outward unit normal, the plane's offset (outward . x on the face),
+// and the half-spaces that cut the face's polygon out of that plane.
 struct PolytopeFace {
-  Vec3 outward = Vec3::Zero();  // unit
-  Real offset = 0;              // outward . x on the face
-  int side_count = 0;
-  HalfSpace sides[4];  // the face's polygon is the face plane cut by these
+  Vec3 outward;
+  Real offset;
+  int side_count;
+  const HalfSpace* sides;
 };
 
-// A convex polytope given by what the separating-axis test and the clipping need.
+// A convex polytope as the separating-axis routine (polytope_triangle) reads it: corners, edges
+// with their classes of parallel edges, faces, and the half-spaces whose intersection it is.
+// The arrays are not owned: they belong to a ConvexPolyhedron (polytope_of_polyhedron) or to a
+// PolytopeArrays (polytope_of_box, polytope_of_triangle), which must outlive the description.
 struct Polytope {
+  enum class Kind { kBox, kTriangle, kPolyhedron };
+  Kind kind = Kind::kTriangle;
   int vertex_count = 0;
-  Vec3 vertices[8];
+  const Vec3* vertices = nullptr;
   int edge_count = 0;
-  int edge_from[12] = {};
-  int edge_to[12] = {};
-  int edge_direction[12] = {};
+  const int* edge_from = nullptr;  // edge e joins vertices[edge_from[e]] and vertices[edge_to[e]]
+  const int* edge_to = nullptr;
+  const int* edge_direction = nullptr;  // its class: an index into `directions`
   int direction_count = 0;
-  Vec3 directions[3];  // unit edge directions, one per parallel class
+  const Vec3* directions = nullptr;  // unit, one per class of parallel edges
+  // Face f: the plane faces[f] (unit outward normal) and its sides
+  // sides[face_begin[f] .. face_begin[f + 1]).
   int face_count = 0;
-  PolytopeFace faces[6];
+  const HalfSpace* faces = nullptr;
+  const int* face_begin = nullptr;
+  const HalfSpace* sides = nullptr;
   int bound_count = 0;
-  HalfSpace bounds[6];  // the polytope is the intersection of these
-  Vec3 center = Vec3::Zero();
-  Real size = 0;
-  Real coord = 0;
-  // For closest points: a box (axes, half extents) or else the triangle of the first 3 vertices.
-  bool is_box = false;
+  const HalfSpace* bounds = nullptr;  // the polytope is the intersection of these
+  Vec3 center = Vec3::Zero();         // an interior point (the side of a two-sided triangle)
+  Real size = 0;                      // a length of the polytope's scale (for tolerances)
+  Real coord = 0;                     // largest coordinate magnitude (for rounding tolerances)
+  // Whether a face's patch (the triangle clipped to the face's polygon) always holds the
+  // polytope's deepest point along the face's normal: true for a box (it is the prism over each
+  // of its faces) and a triangle (its faces are all of it), not for a general polyhedron.
+  bool patches_hold_depth = true;
+  // Boxes (kind kBox): the box's frame, for closest points and projections in closed form.
   Mat3 axes = Mat3::Identity();
   Vec3 half_extents = Vec3::Zero();
+  // Polyhedra (kind kPolyhedron), as ConvexPolyhedron documents them; null otherwise. The face
+  // widths give the projection along a face's normal, the loops the faces' corners (for closest
+  // points), the cones which edge pairs can touch; edges_by_cone: whether the edge axes are
+  // tried edge by edge through the cones rather than by parallel class.
+  const Real* face_width = nullptr;
+  const int* loops = nullptr;
+  const Vec3* edge_cone = nullptr;
+  bool edges_by_cone = false;
 
-  Vec3 closest_point(const Vec3& p) const {
-    if (!is_box) return closest_point_on_triangle(p, vertices[0], vertices[1], vertices[2]);
-    const Vec3 local = axes.transpose() * (p - center);
-    return center + axes * local.cwiseMax(-half_extents).cwiseMin(half_extents);
+  PolytopeFace face(int f) const {
+    return {faces[f].normal, faces[f].offset, face_begin[f + 1] - face_begin[f], sides + face_begin[f]};
+  }
+
+  // The closest point of the polytope to a point outside it (of its surface, for a polyhedron:
+  // over the faces cut into fans of triangles).
+  Vec3 closest_point(const Vec3& x) const {
+    if (kind == Kind::kBox) {
+      const Vec3 local = axes.transpose() * (x - center);
+      return center + axes * local.cwiseMax(-half_extents).cwiseMin(half_extents);
+    }
+    if (kind == Kind::kTriangle) return closest_point_on_triangle(x, vertices[0], vertices[1], vertices[2]);
+    Vec3 best = vertices[0];
+    Real best_distance = kInf;
+    for (int f = 0; f < face_count; ++f) {
+      const Vec3& apex = vertices[loops[face_begin[f]]];
+      for (int k = face_begin[f] + 1; k + 1 < face_begin[f + 1]; ++k) {
+        const Vec3 y = closest_point_on_triangle(x, apex, vertices[loops[k]], vertices[loops[k + 1]]);
+        const Real d = (y - x).squaredNorm();
+        if (d < best_distance) {
+          best_distance = d;
+          best = y;
+        }
+      }
+    }
+    return best;
   }
 };
 
-Polytope polytope_of_box(const Obb& box) {
+// Storage for the polytopes that are not a ConvexPolyhedron: a box (8 corners, 12 edges in 3
+// classes, 6 faces of 4 sides) or a triangle (3 corners and edges, 2 faces of 3 sides, 5 bounds).
+struct PolytopeArrays {
+  Vec3 vertices[8];
+  int edge_from[12] = {};
+  int edge_to[12] = {};
+  int edge_direction[12] = {};
+  Vec3 directions[3];
+  HalfSpace faces[6];
+  int face_begin[7] = {};
+  HalfSpace sides[24];
+  HalfSpace bounds[6];
+};
+
+Polytope polytope_of_box(const Obb& box, PolytopeArrays& arrays) {
   Polytope p;
+  p.kind = Polytope::Kind::kBox;
+  p.vertices = arrays.vertices;
+  p.edge_from = arrays.edge_from;
+  p.edge_to = arrays.edge_to;
+  p.edge_direction = arrays.edge_direction;
+  p.directions = arrays.directions;
+  p.faces = arrays.faces;
+  p.face_begin = arrays.face_begin;
+  p.sides = arrays.sides;
+  p.bounds = arrays.faces;  // a box is the intersection of its faces' half-spaces
   const Vec3& c = box.center;
   const Vec3 h = box.half_extents.cwiseAbs();
   p.center = c;
@@ -354,55 +422,65 @@ Polytope polytope_of_box(const Obb& box) {
   for (int i = 0; i < 8; ++i) {
     Vec3 x = c;
     for (int k = 0; k < 3; ++k) x += ((i >> k) & 1 ? h[k] : -h[k]) * box.axes.col(k);
-    p.vertices[i] = x;
+    arrays.vertices[i] = x;
   }
   p.direction_count = 3;
   for (int k = 0; k < 3; ++k) {
-    p.directions[k] = box.axes.col(k);
+    arrays.directions[k] = box.axes.col(k);
     for (int i = 0; i < 8; ++i) {
       if ((i >> k) & 1) continue;
-      p.edge_from[p.edge_count] = i;
-      p.edge_to[p.edge_count] = i | (1 << k);
-      p.edge_direction[p.edge_count] = k;
+      arrays.edge_from[p.edge_count] = i;
+      arrays.edge_to[p.edge_count] = i | (1 << k);
+      arrays.edge_direction[p.edge_count] = k;
       ++p.edge_count;
     }
   }
+  int side_count = 0;
   for (int k = 0; k < 3; ++k) {
     for (const Real sign : {Real(1), Real(-1)}) {
       const Vec3 n = sign * box.axes.col(k);
-      PolytopeFace& face = p.faces[p.face_count++];
-      face.outward = n;
-      face.offset = n.dot(c) + h[k];
-      p.bounds[p.bound_count++] = {n, face.offset};
+      arrays.face_begin[p.face_count] = side_count;
+      arrays.faces[p.face_count++] = {n, n.dot(c) + h[k]};
       for (int j = 0; j < 3; ++j) {
         if (j == k) continue;
         const Vec3 m = box.axes.col(j);
-        face.sides[face.side_count++] = {m, m.dot(c) + h[j]};
-        face.sides[face.side_count++] = {-m, -m.dot(c) + h[j]};
+        arrays.sides[side_count++] = {m, m.dot(c) + h[j]};
+        arrays.sides[side_count++] = {-m, -m.dot(c) + h[j]};
       }
     }
   }
+  arrays.face_begin[p.face_count] = side_count;
+  p.bound_count = p.face_count;
   p.size = 2 * h.norm();
   p.coord = max_abs(c) + h.sum();
-  p.is_box = true;
   p.axes = box.axes;
   p.half_extents = h;
   return p;
 }
 
-Polytope polytope_of_triangle(const TriangleFrame& tri) {
+Polytope polytope_of_triangle(const TriangleFrame& tri, PolytopeArrays& arrays) {
   Polytope p;
+  p.kind = Polytope::Kind::kTriangle;
+  p.vertices = arrays.vertices;
+  p.edge_from = arrays.edge_from;
+  p.edge_to = arrays.edge_to;
+  p.edge_direction = arrays.edge_direction;
+  p.directions = arrays.directions;
+  p.faces = arrays.faces;
+  p.face_begin = arrays.face_begin;
+  p.sides = arrays.sides;
+  p.bounds = arrays.bounds;
   p.vertex_count = 3;
-  for (int i = 0; i < 3; ++i) p.vertices[i] = tri.v[i];
+  for (int i = 0; i < 3; ++i) arrays.vertices[i] = tri.v[i];
   p.center = (tri.v[0] + tri.v[1] + tri.v[2]) / 3;
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = tri.v[(i + 1) % 3] - tri.v[i];
     const Real len = e.norm();
     if (!(len > kTiny * tri.size)) continue;
-    p.directions[p.direction_count] = e / len;
-    p.edge_from[p.edge_count] = i;
-    p.edge_to[p.edge_count] = (i + 1) % 3;
-    p.edge_direction[p.edge_count] = p.direction_count;
+    arrays.directions[p.direction_count] = e / len;
+    arrays.edge_from[p.edge_count] = i;
+    arrays.edge_to[p.edge_count] = (i + 1) % 3;
+    arrays.edge_direction[p.edge_count] = p.direction_count;
     ++p.edge_count;
     ++p.direction_count;
   }
@@ -413,17 +491,51 @@ Polytope polytope_of_triangle(const TriangleFrame& tri) {
       sides[i] = {-m, -m.dot(tri.v[i])};
     }
     for (const Real sign : {Real(1), Real(-1)}) {
-      PolytopeFace& face = p.faces[p.face_count++];
-      face.outward = sign * tri.normal;
-      face.offset = face.outward.dot(tri.v[0]);
-      face.side_count = 3;
-      for (int i = 0; i < 3; ++i) face.sides[i] = sides[i];
-      p.bounds[p.bound_count++] = {face.outward, face.offset};
+      const Vec3 outward = sign * tri.normal;
+      arrays.face_begin[p.face_count] = 3 * p.face_count;
+      arrays.faces[p.face_count] = {outward, outward.dot(tri.v[0])};
+      for (int i = 0; i < 3; ++i) arrays.sides[3 * p.face_count + i] = sides[i];
+      arrays.bounds[p.bound_count++] = arrays.faces[p.face_count];
+      ++p.face_count;
     }
-    for (int i = 0; i < 3; ++i) p.bounds[p.bound_count++] = sides[i];
+    arrays.face_begin[p.face_count] = 3 * p.face_count;
+    for (int i = 0; i < 3; ++i) arrays.bounds[p.bound_count++] = sides[i];
   }
   p.size = tri.size;
   p.coord = tri.coord;
+  return p;
+}
+
+Polytope polytope_of_polyhedron(const ConvexPolyhedron& polyhedron) {
+  Polytope p;
+  p.kind = Polytope::Kind::kPolyhedron;
+  p.vertex_count = int(polyhedron.vertices.size());
+  p.vertices = polyhedron.vertices.data();
+  p.edge_count = int(polyhedron.edge_from.size());
+  p.edge_from = polyhedron.edge_from.data();
+  p.edge_to = polyhedron.edge_to.data();
+  p.edge_direction = polyhedron.edge_direction.data();
+  p.direction_count = int(polyhedron.directions.size());
+  p.directions = polyhedron.directions.data();
+  p.face_count = polyhedron.face_count();
+  p.faces = polyhedron.faces.data();
+  p.face_begin = polyhedron.face_begin.data();
+  p.sides = polyhedron.sides.data();
+  p.bound_count = polyhedron.face_count();
+  p.bounds = polyhedron.faces.data();
+  p.center = polyhedron.center;
+  p.size = polyhedron.size;
+  p.coord = polyhedron.coord;
+  p.patches_hold_depth = false;
+  p.face_width = polyhedron.face_width.data();
+  p.loops = polyhedron.loops.data();
+  p.edge_cone = polyhedron.edge_cone.data();
+  // Per triangle, the parallel classes cost 2 x 3 x classes projections of all corners,
+  // the cones 3 x edges tests of 3 dot products (and their branches) plus a projection
+  // per pair that passes. Measured on the drop scene's stretched icosahedra (15 classes,
+  // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call; on random hulls
+  // without parallel edges (12 to 32 corners) the cones are 1.9-2.5x faster per triangle.
+  p.edges_by_cone = p.direction_count * (p.vertex_count + 3) > 8 * p.edge_count;
   return p;
 }
 
@@ -447,7 +559,7 @@ struct Interval {
 }
 
 [[gnu::always_inline]] inline Interval project(const Polytope& p, const Vec3& u) {
-  if (p.is_box) {
+  if (p.kind == Polytope::Kind::kBox) {
     // Centre and radius: three dot products instead of eight.
     const Real c = u.dot(p.center);
     const Real radius = p.half_extents.dot((p.axes.transpose() * u).cwiseAbs());
@@ -462,96 +574,6 @@ struct Interval {
   const Real x2 = u.dot(tri.v[2]);
   return {std::min({x0, x1, x2}), std::max({x0, x1, x2})};
 }
-
-// A ConvexPolyhedron seen as the shape of the separating-axis routines below (the members they
-// read, as pointers into its arrays).
-struct PolyhedronFace {
-  Vec3 outward;
-  Real offset;
-  int side_count;
-  const HalfSpace* sides;
-};
-
-struct PolyhedronShape {
-  struct Faces {
-    const ConvexPolyhedron* p;
-    PolyhedronFace operator[](int f) const {
-      const int begin = p->face_begin[std::size_t(f)];
-      return {p->faces[std::size_t(f)].normal, p->faces[std::size_t(f)].offset,
-              p->face_begin[std::size_t(f) + 1] - begin, p->sides.data() + begin};
-    }
-  };
-
-  explicit PolyhedronShape(const ConvexPolyhedron& p)
-      : source(&p),
-        vertex_count(int(p.vertices.size())),
-        vertices(p.vertices.data()),
-        edge_count(int(p.edge_from.size())),
-        edge_from(p.edge_from.data()),
-        edge_to(p.edge_to.data()),
-        edge_direction(p.edge_direction.data()),
-        edge_cone(p.edge_cone.data()),
-        face_width(p.face_width.data()),
-        direction_count(int(p.directions.size())),
-        directions(p.directions.data()),
-        face_count(p.face_count()),
-        faces{&p},
-        bound_count(p.face_count()),
-        bounds(p.faces.data()),
-        center(p.center),
-        size(p.size),
-        coord(p.coord),
-        // Per triangle, the parallel classes cost 2 x 3 x classes projections of all corners,
-        // the cones 3 x edges tests of 3 dot products (and their branches) plus a projection
-        // per pair that passes. Measured on the drop scene's stretched icosahedra (15 classes,
-        // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call; on random hulls
-        // without parallel edges (12 to 32 corners) the cones are 1.9-2.5x faster per triangle.
-        edges_by_cone(direction_count * (vertex_count + 3) > 8 * edge_count) {}
-
-  // The closest point of the surface (for a point outside: of the polyhedron), over the faces
-  // cut into fans of triangles.
-  Vec3 closest_point(const Vec3& x) const {
-    Vec3 best = vertices[0];
-    Real best_distance = kInf;
-    for (int f = 0; f < face_count; ++f) {
-      const int begin = source->face_begin[std::size_t(f)];
-      const int end = source->face_begin[std::size_t(f) + 1];
-      const Vec3& apex = vertices[source->loops[std::size_t(begin)]];
-      for (int k = begin + 1; k + 1 < end; ++k) {
-        const Vec3 y = closest_point_on_triangle(x, apex, vertices[source->loops[std::size_t(k)]],
-                                                 vertices[source->loops[std::size_t(k) + 1]]);
-        const Real d = (y - x).squaredNorm();
-        if (d < best_distance) {
-          best_distance = d;
-          best = y;
-        }
-      }
-    }
-    return best;
-  }
-
-  const ConvexPolyhedron* source;
-  int vertex_count;
-  const Vec3* vertices;
-  int edge_count;
-  const int* edge_from;
-  const int* edge_to;
-  const int* edge_direction;
-  const Vec3* edge_cone;
-  const Real* face_width;
-  int direction_count;
-  const Vec3* directions;
-  int face_count;
-  Faces faces;
-  int bound_count;
-  const HalfSpace* bounds;
-  Vec3 center;
-  Real size;
-  Real coord;
-  bool edges_by_cone;
-};
-
-Interval project(const PolyhedronShape& p, const Vec3& u) { return project_points(p.vertices, p.vertex_count, u); }
 
 enum class AxisKind { kTriangleFace, kShapeFace, kEdges };
 
@@ -588,8 +610,7 @@ constexpr int kScratchContacts = 48;
 // the prism, a shape edge crossing a prism wall, or a prism edge (the line through a triangle
 // corner along N) crossing the shape's boundary: all three kinds are generated, so the deepest
 // contact is exactly the directional penetration depth along N.
-template <class Shape>
-int triangle_face_contacts(const Shape& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
+int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
                            ContactPoint* out) {
   int count = 0;
   const Real plane = normal.dot(tri.v[0]);
@@ -650,8 +671,7 @@ int triangle_face_contacts(const Shape& shape, const TriangleFrame& tri, const V
 // Contacts for a face of the shape (outward f, N = -f): the triangle clipped to the face's
 // polygon prism, each point at its depth below the face plane. Clipping a triangle by k sides
 // leaves at most 3 + k corners; at most kScratchContacts are written.
-template <class Face>
-int shape_face_contacts(const Face& face, const TriangleFrame& tri, ContactPoint* out) {
+int shape_face_contacts(const PolytopeFace& face, const TriangleFrame& tri, ContactPoint* out) {
   constexpr int kBuffer = 3 + kMaxPolyhedronFaceCorners;
   Vec3 buffer_a[kBuffer] = {tri.v[0], tri.v[1], tri.v[2]};
   Vec3 buffer_b[kBuffer];
@@ -668,8 +688,7 @@ int shape_face_contacts(const Face& face, const TriangleFrame& tri, ContactPoint
 }
 
 // The closest points of the shape's supporting edge along direction k and the triangle's edge j.
-template <class Shape>
-int edge_contacts(const Shape& shape, const TriangleFrame& tri, const Axis& axis, Real slack, ContactPoint* out) {
+int edge_contacts(const Polytope& shape, const TriangleFrame& tri, const Axis& axis, Real slack, ContactPoint* out) {
   int best = -1;
   Real best_height = kInf;
   if (axis.single_edge) {
@@ -725,8 +744,7 @@ struct PolytopeTrianglePair {
   Real distance_squared = kInf;
 };
 
-template <class Shape>
-PolytopeTrianglePair closest_polytope_triangle(const Shape& shape, const TriangleFrame& tri) {
+PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const TriangleFrame& tri) {
   PolytopeTrianglePair best;
   const auto consider = [&](const Vec3& x, const Vec3& y) {
     const Real d2 = (x - y).squaredNorm();
@@ -774,8 +792,7 @@ PolytopeTrianglePair closest_polytope_triangle(const Shape& shape, const Triangl
 // the normal, and the contacts come from the features of that axis. Apart: the exact closest pair
 // decides, and the axis' features are used only when its gap is the distance (a face over a
 // vertex, crossing edges), so that a face hovering over a face still gets a patch.
-template <class Shape>
-int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const ContactOptions& options, int max_contacts,
+int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const ContactOptions& options, int max_contacts,
                       ContactPoint* out) {
   const Real size = std::max(shape.size, tri.size);
   const Real slack = tolerance(size, std::max(shape.coord, tri.coord));
@@ -796,14 +813,13 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   // Along the shape's own face f (n = -outward): a polyhedron's projection is known from the
   // face's plane and width, three dot products instead of one per corner per face.
   const auto overlaps_both_ways_on_face = [&](int f, const Vec3& n) {
-    if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
+    if (shape.face_width) {
       const Interval t = project(tri, n);
       const Real lo = -shape.faces[f].offset;
       const Real hi = lo + shape.face_width[f];
       return std::pair<Real, Real>{t.hi - lo, hi - t.lo};
-    } else {
-      return overlaps_both_ways(n);
     }
+    return overlaps_both_ways(n);
   };
   Axis best_face;
   Axis best_tri_face;
@@ -823,7 +839,7 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   // (most candidates of a query volume are apart along the triangle's normal or a face's).
   if (separation > margin) return 0;
   for (int f = 0; f < shape.face_count; ++f) {
-    const Vec3 n = -shape.faces[f].outward;
+    const Vec3 n = -shape.faces[f].normal;
     const auto [ov, reverse] = overlaps_both_ways_on_face(f, n);
     separation = std::max(separation, -std::min(ov, reverse));
     if (separation > margin) return 0;
@@ -838,36 +854,31 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
   // the triangle's edge its support along N = -(+-u), i.e. N . (t x n) >= 0, which is
   // +-(d . n) >= 0; edge_cone makes the first test three dot products. The other crosses are
   // never the least overlap nor the only separating axis.
-  bool by_cone = false;
-  if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
-    by_cone = shape.edges_by_cone;
-    if (by_cone) {
-      Vec3 edges[3];
-      for (int j = 0; j < 3; ++j) edges[j] = tri.v[(j + 1) % 3] - tri.v[j];
-      for (int k = 0; k < shape.edge_count; ++k) {
-        const Vec3* cone = shape.edge_cone + 3 * k;
-        const Vec3 d = shape.vertices[shape.edge_to[k]] - shape.vertices[shape.edge_from[k]];
-        // A degenerate triangle has no sides: every pair in the shape's cone is kept.
-        const Real dn = tri.degenerate ? Real(0) : d.dot(tri.normal);
-        for (int j = 0; j < 3; ++j) {
-          const Real sign = edges[j].dot(cone[0]) < 0 ? Real(-1) : Real(1);
-          if (sign * edges[j].dot(cone[1]) < 0 || sign * edges[j].dot(cone[2]) < 0 || sign * dn < 0) continue;
-          const Vec3 u = sign * d.cross(edges[j]);
-          const Real len = u.norm();
-          // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
-          if (!(len > 1e-6 * edges[j].norm() * d.norm())) continue;
-          const Vec3 n = -u / len;
-          // The cone test put -n (the shape's outward normal here) in edge k's cone: the edge is
-          // the shape's support along -n, and its corner gives the shape's projection.
-          const Real overlap = project(tri, n).hi - n.dot(shape.vertices[shape.edge_from[k]]);
-          separation = std::max(separation, -overlap);
-          if (separation > margin) return 0;
-          consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
-        }
+  if (shape.edges_by_cone) {
+    Vec3 edges[3];
+    for (int j = 0; j < 3; ++j) edges[j] = tri.v[(j + 1) % 3] - tri.v[j];
+    for (int k = 0; k < shape.edge_count; ++k) {
+      const Vec3* cone = shape.edge_cone + 3 * k;
+      const Vec3 d = shape.vertices[shape.edge_to[k]] - shape.vertices[shape.edge_from[k]];
+      // A degenerate triangle has no sides: every pair in the shape's cone is kept.
+      const Real dn = tri.degenerate ? Real(0) : d.dot(tri.normal);
+      for (int j = 0; j < 3; ++j) {
+        const Real sign = edges[j].dot(cone[0]) < 0 ? Real(-1) : Real(1);
+        if (sign * edges[j].dot(cone[1]) < 0 || sign * edges[j].dot(cone[2]) < 0 || sign * dn < 0) continue;
+        const Vec3 u = sign * d.cross(edges[j]);
+        const Real len = u.norm();
+        // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
+        if (!(len > 1e-6 * edges[j].norm() * d.norm())) continue;
+        const Vec3 n = -u / len;
+        // The cone test put -n (the shape's outward normal here) in edge k's cone: the edge is
+        // the shape's support along -n, and its corner gives the shape's projection.
+        const Real overlap = project(tri, n).hi - n.dot(shape.vertices[shape.edge_from[k]]);
+        separation = std::max(separation, -overlap);
+        if (separation > margin) return 0;
+        consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
       }
     }
-  }
-  if (!by_cone) {
+  } else {
     for (int k = 0; k < shape.direction_count; ++k) {
       for (int j = 0; j < 3; ++j) {
         const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
@@ -910,7 +921,7 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
       case AxisKind::kTriangleFace:
         return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
       case AxisKind::kShapeFace:
-        return shape_face_contacts(shape.faces[axis.shape_index], tri, scratch.data());
+        return shape_face_contacts(shape.face(axis.shape_index), tri, scratch.data());
       case AxisKind::kEdges:
         return edge_contacts(shape, tri, axis, slack, scratch.data());
     }
@@ -957,7 +968,7 @@ int polytope_triangle(const Shape& shape, const TriangleFrame& tri, const Contac
     chosen = face_choice;
     count = generate(chosen);
   }
-  if constexpr (std::is_same_v<Shape, PolyhedronShape>) {
+  if (!shape.patches_hold_depth) {
     // A box is the prism over each of its faces, so a face's patch always holds the triangle's
     // deepest point along its normal. A general polyhedron is not: part of the triangle can be
     // inside it beyond the face's polygon, under a neighbouring face, and the patch then falls
@@ -1337,9 +1348,10 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
   // A midphase calls this for many triangles against one box: its polytope (vertices, edges, faces
   // and their sides, over a kilobyte) is built once per box and thread, not per triangle.
   thread_local Obb last_box{Vec3::Constant(kInf), Mat3::Zero(), Vec3::Zero()};
+  thread_local PolytopeArrays last_arrays;
   thread_local Polytope last_polytope;
   if (box.center != last_box.center || box.axes != last_box.axes || box.half_extents != last_box.half_extents) {
-    last_polytope = polytope_of_box(box);
+    last_polytope = polytope_of_box(box, last_arrays);
     last_box = box;
   }
   return polytope_triangle(last_polytope, tri, options, kMaxBoxTriangleContacts, out);
@@ -1351,8 +1363,8 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
 int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
                                 const ContactOptions& options, ContactPoint* out) {
   if (!finite(a, b, c) || polyhedron.vertices.empty() || !polyhedron.center.allFinite()) return 0;
-  return polytope_triangle(PolyhedronShape(polyhedron), TriangleFrame(a, b, c), options, kMaxPolyhedronTriangleContacts,
-                           out);
+  return polytope_triangle(polytope_of_polyhedron(polyhedron), TriangleFrame(a, b, c), options,
+                           kMaxPolyhedronTriangleContacts, out);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1383,7 +1395,8 @@ int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, co
     out[0] = make_contact(on_b, n, -distance);
     return 1;
   }
-  return polytope_triangle(polytope_of_triangle(ta), tb, options, kMaxTriangleTriangleContacts, out);
+  PolytopeArrays arrays;
+  return polytope_triangle(polytope_of_triangle(ta, arrays), tb, options, kMaxTriangleTriangleContacts, out);
 }
 
 // ---------------------------------------------------------------------------------------------
