@@ -34,6 +34,7 @@
 #include "boxtree/contact.h"
 
 #include "boxtree/geometry.h"
+#include "contact_internal.h"
 #include "internal.h"
 
 #include <algorithm>
@@ -588,20 +589,6 @@ struct Axis {
   bool single_edge = false;  // shape_index is one edge of a polyhedron, not a parallel class
 };
 
-// Sutherland-Hodgman: keeps the part of the convex polygon inside the half-space.
-int clip_polygon(const Vec3* in, int n, const HalfSpace& h, Vec3* out) {
-  int m = 0;
-  for (int i = 0; i < n; ++i) {
-    const Vec3& cur = in[i];
-    const Vec3& next = in[(i + 1) % n];
-    const Real dc = h.signed_distance_scaled(cur);
-    const Real dn = h.signed_distance_scaled(next);
-    if (dc <= 0) out[m++] = cur;
-    if ((dc < 0 && dn > 0) || (dc > 0 && dn < 0)) out[m++] = cur + (dc / (dc - dn)) * (next - cur);
-  }
-  return m;
-}
-
 constexpr int kScratchContacts = 48;
 
 // Contacts for the triangle's face as the normal N = +-n: the points of the shape over the
@@ -679,7 +666,8 @@ int shape_face_contacts(const PolytopeFace& face, const TriangleFrame& tri, Cont
   Vec3* next = buffer_b;
   int n = 3;
   for (int s = 0; s < face.side_count && n > 0; ++s) {
-    n = clip_polygon(in, n, face.sides[s], next);
+    n = detail::clip_polygon(
+        in, n, [&](const Vec3& x) { return face.sides[s].signed_distance_scaled(x); }, next);
     std::swap(in, next);
   }
   n = std::min(n, kScratchContacts);
