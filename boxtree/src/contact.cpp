@@ -182,35 +182,14 @@ ContactPoint make_contact(const Vec3& position, const Vec3& normal, Real depth) 
 // ---------------------------------------------------------------------------------------------
 // Contact reduction
 
-using Point2 = std::pair<Real, Real>;
-
-Real cross_2d(const Point2& o, const Point2& a, const Point2& b) {
-  return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
-}
-
-// The convex hull of n points (sorted in place) as a counter-clockwise polygon without collinear
-// vertices (Andrew's monotone chain); returns its vertex count (1 or 2 for a point or a segment).
-int convex_hull_2d(Point2* p, int n, Point2* hull) {
-  std::sort(p, p + n);
-  if (n < 3) {
-    std::copy(p, p + n, hull);
-    return n == 2 && p[0] == p[1] ? 1 : n;
-  }
-  int k = 0;
-  for (int i = 0; i < n; ++i) {
-    while (k >= 2 && cross_2d(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  for (int i = n - 2, lower = k + 1; i >= 0; --i) {
-    while (k >= lower && cross_2d(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  return std::max(k - 1, 1);  // the last point repeats the first
+// Twice the signed area of the triangle (o, a, b): positive when it turns counter-clockwise.
+Real cross_2d(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
 
 // Twice the area that q adds to the convex polygon `hull` (counter-clockwise, h vertices; a
 // segment or a point when h < 3): the triangles from q to the edges that face it.
-Real added_area_2d(const Point2* hull, int h, const Point2& q) {
+Real added_area_2d(const Vec2* hull, int h, const Vec2& q) {
   if (h == 1) return 0;
   if (h == 2) return std::abs(cross_2d(hull[0], hull[1], q));
   Real added = 0;
@@ -249,18 +228,19 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
   Vec3 w;
   detail::orthonormal_completion(contacts[0].normal.normalized(), u, w);
   const int n = std::min(kept, 64);
-  std::array<Point2, 64> planar;
+  std::array<Vec2, 64> planar;
+  planar.fill(Vec2::Zero());  // only [0, n) is read; GCC cannot tell
   std::array<Real, 64> distance;  // squared, to the nearest chosen point
   std::array<bool, 64> chosen{};
   Real extent_squared = 0;
   for (int i = 0; i < n; ++i) {
-    planar[i] = {contacts[i].position.dot(u), contacts[i].position.dot(w)};
+    planar[i] = Vec2(contacts[i].position.dot(u), contacts[i].position.dot(w));
     distance[i] = (contacts[i].position - contacts[0].position).squaredNorm();
     extent_squared = std::max(extent_squared, distance[i]);
   }
   std::array<int, 64> order{};
-  std::array<Point2, 64> points;
-  std::array<Point2, 130> hull;
+  std::array<Vec2, 64> points;
+  std::array<Vec2, 128> hull;  // room for 2 x 64 points (convex_hull_2d)
   chosen[0] = true;
   order[0] = 0;
   int selected = 1;
@@ -292,7 +272,7 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
       distance[i] = std::min(distance[i], (contacts[i].position - contacts[best].position).squaredNorm());
     }
     for (int s = 0; s < selected; ++s) points[s] = planar[order[s]];
-    h = convex_hull_2d(points.data(), selected, hull.data());
+    h = detail::convex_hull_2d(points.data(), selected, hull.data());
     area = 0;
     for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[(i + 1) % h]);
   }
