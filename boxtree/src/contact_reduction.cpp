@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // reduce_contacts (contact.h) and its array form reduce_in_place (contact_internal.h): merging
 // near-duplicate contacts, then keeping the deepest and greedily the points that spread the set
-// the most (the area of their convex hull across the deepest contact's normal).
+// the most (the area of their convex hull, convex_hull_2d of internal.h, across the deepest
+// contact's normal).
 #include <algorithm>
 #include <array>
 #include <cmath>
