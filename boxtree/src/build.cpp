@@ -487,108 +487,193 @@ Tree<Volume> build_by_rule(std::shared_ptr<const TriangleMesh> mesh_ptr, MergeRu
   return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), heights[root]);
 }
 
-}  // namespace
-
+// build_tree's checks of the mesh: throws Error unless there is one, valid (validate_mesh) and
+// within Tree<Volume>'s facet limit.
 template <class Volume>
-Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const BuildSettings& settings,
-                        BuildStats* stats) {
-  if constexpr (is_hybrid_v<Volume>) {
-    if (settings.hybrid_level < 1) throw Error("build_tree: a hybrid method needs hybrid_level >= 1");
-    return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
-                       settings.parent_fit == ParentFit::fit_facets);
-  }
-  const auto start = std::chrono::steady_clock::now();
-  if (!mesh_ptr) throw Error("build_tree: no mesh given");
-  const TriangleMesh& mesh = *mesh_ptr;
-  validate_mesh(mesh);
-  const std::size_t n = mesh.facet_count();
-  if (n > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
-  if (settings.merge_rule) return build_by_rule<Volume>(std::move(mesh_ptr), settings.merge_rule, start, stats);
+void check_mesh(const TriangleMesh* mesh) {
+  if (!mesh) throw Error("build_tree: no mesh given");
+  validate_mesh(*mesh);
+  if (mesh->facet_count() > Tree<Volume>::kMaxFacets) throw Error("build_tree: too many facets");
+}
+
+// build_tree's checks of the greedy rounds' settings: throws Error unless the Morton window and
+// the neighbour bound are usable.
+void check_greedy_settings(const BuildSettings& settings) {
   if (settings.near_window < 1) throw Error("build_tree: near_window must be at least 1");
   if (settings.max_neighbors < 2) throw Error("build_tree: max_neighbors must be at least 2");
+}
 
-  // Nodes in build order: leaves 0..n-1 (node i is facet i), parents appended, children in
-  // `children`. The rounds work on axis-aligned bounding boxes only (for boxes, the volumes
-  // themselves): volumes of another kind are fitted during the rounds only for
-  // PairRanking::merged_volume, which ranks candidates by them; otherwise once per parent, in the
-  // final layout.
-  constexpr bool kIsAabb = std::is_same_v<Volume, Aabb>;
-  const bool fit_during_rounds = !kIsAabb && settings.ranking == PairRanking::merged_volume;
-  std::vector<Volume> volumes;  // by build index, when fit_during_rounds
-  // The children of parent b (build index n + k): children[2 k], children[2 k + 1].
-  std::vector<std::uint32_t> children;
-  children.reserve(2 * (n - 1));
-  if (fit_during_rounds) {
-    volumes.reserve(2 * n - 1);
-    for (FacetId f = 0; f < n; ++f)
-      volumes.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+// The tree's arrays in their final layout (what Tree's constructor takes).
+template <class Volume>
+struct TreeLayout {
+  std::vector<Volume> volumes;
+  std::vector<std::uint32_t> links;
+  int height = 0;
+};
+
+// One greedy bottom-up build (the rounds described at the top of the file) over a checked mesh
+// with n >= 1 facets. Use: pair_up() once (the rounds, down to one root), then layout(). The
+// steps, in order: the constructor (scales of keys and boxes, the leaves' volumes when
+// PairRanking::merged_volume ranks by them), order_facets (the first round's positions),
+// list_mesh_neighbors (the first round's candidate lists), then per round match (the greedy
+// matching), merge_pairs (parents and carried nodes), order_groups (their Morton order) and
+// contract_lists (the next round's lists).
+//
+// Nodes in build order: leaves 0..n-1 (node i is facet i), parents appended, children in
+// `children`. The rounds work on axis-aligned bounding boxes only (for boxes, the volumes
+// themselves): volumes of another kind are fitted during the rounds only for
+// PairRanking::merged_volume, which ranks candidates by them; otherwise once per parent, in the
+// final layout.
+template <class Volume>
+class GreedyBuild {
+ public:
+  GreedyBuild(const TriangleMesh& mesh, const BuildSettings& settings)
+      : mesh_(mesh),
+        settings_(settings),
+        n_(mesh.facet_count()),
+        fit_during_rounds_(!kIsAabb && settings.ranking == PairRanking::merged_volume),
+        store_keys_(fit_during_rounds_),
+        volume_cost_(settings.cost == MergeCost::volume),
+        window_(std::uint32_t(settings.near_window)),
+        next_node_(std::uint32_t(n_)) {
+    children_.reserve(2 * (n_ - 1));
+    if (fit_during_rounds_) {
+      volumes_.reserve(2 * n_ - 1);
+      for (FacetId f = 0; f < n_; ++f)
+        volumes_.push_back(Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+    }
+    Aabb bounds;  // of the facets (a vertex that no facet uses is not checked by validate_mesh)
+    for (FacetId f = 0; f < n_; ++f)
+      for (int k = 0; k < 3; ++k) bounds.expand(mesh.corner(f, k));
+
+    // Keys are floats, costs divided by the mesh's size (its largest extent squared for areas,
+    // cubed for volumes) to stay in float range; rounding to float keeps the order of costs up to
+    // ties, which the nodes' tie orders break.
+    const Real max_extent = bounds.extent().maxCoeff();
+    const Real inv_extent = max_extent > 0 && std::isfinite(1 / max_extent) ? 1 / max_extent : 1;
+    area_scale_ = inv_extent * inv_extent;
+    volume_scale_ = area_scale_ * inv_extent;
+    // The frame of the rounds' boxes (BoxF): x -> (x - origin) * unit, unit a power of two; the
+    // keys' scales divided by unit^2 and unit^3 (exactly) to give the same keys.
+    origin_ = bounds.min;
+    unit_ = max_extent > 0 ? std::ldexp(Real(1), -std::ilogb(max_extent)) : Real(1);
+    box_area_scale_ = area_scale_ / (unit_ * unit_);
+    box_volume_scale_ = volume_scale_ / (unit_ * unit_ * unit_);
   }
-  Aabb bounds;  // of the facets (a vertex that no facet uses is not checked by validate_mesh)
-  for (FacetId f = 0; f < n; ++f)
-    for (int k = 0; k < 3; ++k) bounds.expand(mesh.corner(f, k));
 
-  // Keys are floats, costs divided by the mesh's size (its largest extent squared for areas,
-  // cubed for volumes) to stay in float range; rounding to float keeps the order of costs up to
-  // ties, which the nodes' tie orders break.
-  const bool volume_cost = settings.cost == MergeCost::volume;
-  const Real max_extent = bounds.extent().maxCoeff();
-  const Real inv_extent = max_extent > 0 && std::isfinite(1 / max_extent) ? 1 / max_extent : 1;
-  const Real area_scale = inv_extent * inv_extent;
-  const Real volume_scale = area_scale * inv_extent;
-  const auto make_key = [&](Real area, Real vol) -> Key {
-    if (volume_cost) return {float(vol * volume_scale), float(area * area_scale)};
-    return {float(area * area_scale), 0.0f};
-  };
-  // The frame of the rounds' boxes (BoxF): x -> (x - origin) * unit, unit a power of two; the
-  // keys' scales divided by unit^2 and unit^3 (exactly) to give the same keys.
-  const Vec3 origin = bounds.min;
-  const Real unit = max_extent > 0 ? std::ldexp(Real(1), -std::ilogb(max_extent)) : Real(1);
-  const Real box_area_scale = area_scale / (unit * unit);
-  const Real box_volume_scale = volume_scale / (unit * unit * unit);
-  const auto round_box = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Pairs the nodes round by round until one is left; returns it (the root's build index).
+  std::uint32_t pair_up() {
+    list_mesh_neighbors(order_facets());
+    while (active_.size() > 1) {
+      const std::uint32_t m = std::uint32_t(active_.size());
+      ++stats_.rounds;
+      stats_.candidate_pairs += current_.offsets[m] / 2;
+      match(m);
+      const std::uint32_t next_m = merge_pairs(m);
+      BOXTREE_ASSERT(next_m < m, "a round always pairs at least one node");
+      if (next_m == 1) {
+        active_.swap(next_active_);
+        break;
+      }
+      order_groups(next_m);
+      contract_lists(m, next_m);
+    }
+    return active_[0];
+  }
+
+  // The final layout: depth-first from the root, the two children of a node in adjacent slots
+  // after their parent; a parent's volume is computed (or copied) once its children's are, in the
+  // same traversal. The height is the deepest leaf's depth.
+  TreeLayout<Volume> layout(std::uint32_t root) const {
+    const std::size_t node_count = 2 * n_ - 1;
+    BOXTREE_ASSERT(children_.size() == 2 * (n_ - 1), "a binary tree over n leaves has n-1 parents");
+    const std::uint32_t leaf_flag = Tree<Volume>::kLeafFlag;
+    TreeLayout<Volume> out;
+    out.links.resize(node_count);
+    out.volumes.resize(node_count);
+    struct Visit {
+      std::uint32_t node, slot, depth;
+      bool children_done;
+    };
+    std::vector<Visit> visits{{root, 0, 0, false}};
+    std::uint32_t next_slot = 1;
+    while (!visits.empty()) {
+      Visit& v = visits.back();
+      const std::uint32_t slot = v.slot;
+      if (v.node < n_) {
+        const FacetId f = v.node;
+        out.links[slot] = leaf_flag | f;
+        out.volumes[slot] = fit_during_rounds_
+                                ? volumes_[f]
+                                : Volume::from_triangle(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2));
+        out.height = std::max(out.height, int(v.depth));
+        visits.pop_back();
+      } else if (v.children_done) {
+        const std::uint32_t c = out.links[slot];
+        out.volumes[slot] =
+            fit_during_rounds_ ? volumes_[v.node] : Volume::enclosing(out.volumes[c], out.volumes[c + 1]);
+        visits.pop_back();
+      } else {
+        v.children_done = true;
+        const std::uint32_t c = next_slot, depth = v.depth + 1;
+        const std::size_t k = 2 * (std::size_t(v.node) - n_);
+        out.links[slot] = c;
+        next_slot += 2;
+        const std::uint32_t first_child = children_[k], second_child = children_[k + 1];
+        visits.push_back({second_child, c + 1, depth, false});  // invalidates v
+        visits.push_back({first_child, c, depth, false});
+      }
+    }
+    return out;
+  }
+
+  const BuildStats& stats() const { return stats_; }
+
+ private:
+  static constexpr bool kIsAabb = std::is_same_v<Volume, Aabb>;
+
+  Key make_key(Real area, Real vol) const {
+    if (volume_cost_) return {float(vol * volume_scale_), float(area * area_scale_)};
+    return {float(area * area_scale_), 0.0f};
+  }
+
+  BoxF round_box(const Vec3& a, const Vec3& b, const Vec3& c) const {
     const Aabb box = Aabb::from_triangle(a, b, c);
     BoxF r;
     for (int i = 0; i < 3; ++i) {
-      r.min[i] = float((box.min[i] - origin[i]) * unit);
-      r.max[i] = float((box.max[i] - origin[i]) * unit);
+      r.min[i] = float((box.min[i] - origin_[i]) * unit_);
+      r.max[i] = float((box.max[i] - origin_[i]) * unit_);
     }
     return r;
-  };
+  }
 
-  // The active nodes by position: in the first round the Morton order of the facets, then each
-  // round's parents and carried nodes in the order of their first member's position (so that
-  // nodes stay near their neighbours in memory and the lists of one round are read in order
-  // while the next round's are built). Per position: the node, its box, its rank in the round's
-  // Morton order (which orders the members of a pair and gives the Morton neighbours).
-  std::vector<std::uint32_t> active, next_active;
-  std::vector<BoxF> active_box, next_box;
-  std::vector<std::uint32_t> active_rank, next_rank;
-  // Tie order: the smallest facet id below the node (as if positions kept the facets' order).
-  std::vector<std::uint32_t> active_order, next_order;
   // The rank of merging the nodes at positions p and q: of their boxes (symmetric in p and q),
-  const auto box_pair_key = [&](std::uint32_t p, std::uint32_t q) -> Key {
-    const BoxF merged = BoxF::enclosing(active_box[p], active_box[q]);
-    if (volume_cost) return {float(merged.volume() * box_volume_scale), float(merged.area() * box_area_scale)};
-    return {float(merged.area() * box_area_scale), 0.0f};
-  };
+  Key box_pair_key(std::uint32_t p, std::uint32_t q) const {
+    const BoxF merged = BoxF::enclosing(active_box_[p], active_box_[q]);
+    if (volume_cost_) return {float(merged.volume() * box_volume_scale_), float(merged.area() * box_area_scale_)};
+    return {float(merged.area() * box_area_scale_), 0.0f};
+  }
+
   // and of any kind, p's Morton rank below q's (fitting is not symmetric).
-  const auto pair_key = [&](std::uint32_t p, std::uint32_t q) -> Key {
+  Key pair_key(std::uint32_t p, std::uint32_t q) const {
     if constexpr (!kIsAabb) {
-      if (fit_during_rounds) {
-        const Volume merged = Volume::enclosing(volumes[active[p]], volumes[active[q]]);
-        return make_key(surface_area(merged), volume_cost ? volume(merged) : 0);
+      if (fit_during_rounds_) {
+        const Volume merged = Volume::enclosing(volumes_[active_[p]], volumes_[active_[q]]);
+        return make_key(surface_area(merged), volume_cost_ ? volume(merged) : 0);
       }
     }
     return box_pair_key(p, q);
-  };
+  }
 
-  BuildStats local;
-  // Each round orders the nodes along the Morton curve of their box centres; the mesh adjacency
-  // (contracted) is kept between positions.
-  // morton[i] = (code, index into boxes) in Morton order of the boxes' centres, ties in the order
+  // The key of candidate `slot` (a slot of u's list, partner v) once the lists are built.
+  Key candidate_key(const CandidateLists& lists, std::uint32_t slot, std::uint32_t u, std::uint32_t v) const {
+    return store_keys_ ? lists.keys[slot] : box_pair_key(u, v);
+  }
+
+  // morton_[i] = (code, index into boxes) in Morton order of the boxes' centres, ties in the order
   // of tie(index) (increasing).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> morton, morton_scratch;
-  const auto morton_order = [&](const BoxF* boxes, std::uint32_t count, const auto& tie) {
+  template <class Tie>
+  void morton_order(const BoxF* boxes, std::uint32_t count, const Tie& tie) {
     Real lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (std::uint32_t i = 0; i < count; ++i)
       for (int k = 0; k < 3; ++k) {
@@ -598,57 +683,51 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
       }
     Real scale[3];
     for (int k = 0; k < 3; ++k) scale[k] = hi[k] - lo[k] > 0 ? Real(0x3ff) / (hi[k] - lo[k]) : 0;
-    morton.reserve(count);
-    morton.resize(count);
+    morton_.reserve(count);
+    morton_.resize(count);
     for (std::uint32_t i = 0; i < count; ++i) {
       std::uint32_t code = 0;
       for (int k = 0; k < 3; ++k) {
         const Real q = std::clamp((boxes[i].center(k) - lo[k]) * scale[k], Real(0), Real(0x3ff));
         code |= spread_bits(std::uint32_t(q)) << k;
       }
-      morton[i] = {code, i};
+      morton_[i] = {code, i};
     }
-    radix_sort(morton, morton_scratch);
+    radix_sort(morton_, morton_scratch_);
     for (std::uint32_t i = 0; i + 1 < count;) {  // runs of equal codes (short), sorted by `tie`
       std::uint32_t j = i + 1;
-      while (j < count && morton[j].first == morton[i].first) ++j;
+      while (j < count && morton_[j].first == morton_[i].first) ++j;
       if (j - i > 1)
-        std::sort(morton.begin() + i, morton.begin() + j,
+        std::sort(morton_.begin() + i, morton_.begin() + j,
                   [&](const auto& a, const auto& b) { return tie(a.second) < tie(b.second); });
       i = j;
     }
-  };
-
-  std::vector<std::uint32_t> position(n);  // of facet f
-  // Room for the first round (the largest); the arrays are reused by the later rounds.
-  for (auto* v : {&active, &next_active, &active_rank, &next_rank, &active_order, &next_order}) v->reserve(n);
-  {
-    next_box.resize(n);
-    for (FacetId f = 0; f < n; ++f) next_box[f] = round_box(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
-    morton_order(next_box.data(), std::uint32_t(n), [](std::uint32_t f) { return f; });
-    active.resize(n);
-    active_box.resize(n);
-    active_rank.resize(n);
-    active_order.resize(n);
-    for (std::uint32_t p = 0; p < n; ++p) {
-      active[p] = morton[p].second;
-      active_order[p] = active[p];
-      active_box[p] = next_box[active[p]];
-      active_rank[p] = p;
-      position[morton[p].second] = p;
-    }
   }
 
-  // The candidate lists of the current round (positions 0..m-1) and those being built for the
-  // next one.
-  CandidateLists current, next;
-  std::vector<std::uint32_t> stamp;
-  const std::uint32_t window = std::uint32_t(settings.near_window);
-  const bool store_keys = fit_during_rounds;
-  // The key of candidate `slot` (a slot of u's list, partner v) once the lists are built.
-  const auto candidate_key = [&](const CandidateLists& lists, std::uint32_t slot, std::uint32_t u, std::uint32_t v) {
-    return store_keys ? lists.keys[slot] : box_pair_key(u, v);
-  };
+  // The first round's active nodes: the facets in the Morton order of their boxes (ties by facet
+  // id), each its own tie order. Returns each facet's position.
+  std::vector<std::uint32_t> order_facets() {
+    std::vector<std::uint32_t> position(n_);  // of facet f
+    // Room for the first round (the largest); the arrays are reused by the later rounds.
+    for (auto* v : {&active_, &next_active_, &active_rank_, &next_rank_, &active_order_, &next_order_}) v->reserve(n_);
+    next_box_.resize(n_);
+    for (FacetId f = 0; f < n_; ++f)
+      next_box_[f] = round_box(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2));
+    morton_order(next_box_.data(), std::uint32_t(n_), [](std::uint32_t f) { return f; });
+    active_.resize(n_);
+    active_box_.resize(n_);
+    active_rank_.resize(n_);
+    active_order_.resize(n_);
+    for (std::uint32_t p = 0; p < n_; ++p) {
+      active_[p] = morton_[p].second;
+      active_order_[p] = active_[p];
+      active_box_[p] = next_box_[active_[p]];
+      active_rank_[p] = p;
+      position[morton_[p].second] = p;
+    }
+    return position;
+  }
+
   // Builds list i of `lists` (whose lists below i are built) from the codes 2 q of the mesh
   // neighbours q gathered in list i's slots [offsets[i], offsets[i] + count) (distinct, without i,
   // stamp[q] == i): adds the Morton neighbours not already there and keeps the list's cheapest
@@ -656,26 +735,27 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
   // i and reads those below i from their lists (where partners above are read in increasing
   // order: each list keeps its upper part sorted and a cursor in it).
   // `by_rank`: the positions in Morton order (null: the identity), `rank`: i's rank there.
-  const auto build_list = [&](CandidateLists& lists, std::uint32_t i, std::uint32_t m, std::uint32_t count,
-                              const std::pair<std::uint32_t, std::uint32_t>* by_rank, std::uint32_t rank) {
+  void build_list(CandidateLists& lists, std::uint32_t i, std::uint32_t m, std::uint32_t count,
+                  const std::pair<std::uint32_t, std::uint32_t>* by_rank, std::uint32_t rank) {
     const std::uint32_t first_slot = lists.offsets[i];
     std::uint32_t* const begin = lists.codes.get() + first_slot;
     std::uint32_t* end = begin + count;
-    for (std::uint32_t k = rank >= window ? rank - window : 0, k_end = std::min(m, rank + window + 1); k < k_end; ++k) {
+    for (std::uint32_t k = rank >= window_ ? rank - window_ : 0, k_end = std::min(m, rank + window_ + 1); k < k_end;
+         ++k) {
       const std::uint32_t w = by_rank ? by_rank[k].second : k;
-      if (k != rank && stamp[w] != i) *end++ = 2 * w + 1;
+      if (k != rank && stamp_[w] != i) *end++ = 2 * w + 1;
     }
     lists.offsets[i + 1] = first_slot + std::uint32_t(end - begin);
     std::uint32_t best = kNone;
     Key best_key{};
     const auto consider = [&](const std::uint32_t* c, const Key& key) {
       const std::uint32_t q = *c >> 1;
-      if (best == kNone || key < best_key || (key == best_key && active_order[q] < active_order[best])) {
+      if (best == kNone || key < best_key || (key == best_key && active_order_[q] < active_order_[best])) {
         best = q;
         best_key = key;
       }
     };
-    if (!store_keys) {
+    if (!store_keys_) {
       for (const std::uint32_t* c = begin; c < end; ++c) {
         const std::uint32_t q = *c >> 1;
         consider(c, box_pair_key(i, q));
@@ -693,181 +773,188 @@ Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const Buil
       lists.cursor[i] = first_slot + std::uint32_t(middle - begin);
       for (const std::uint32_t* c = middle; c < end; ++c) {
         const std::uint32_t q = *c >> 1;
-        keys[c - begin] = active_rank[q] < active_rank[i] ? pair_key(q, i) : pair_key(i, q);
+        keys[c - begin] = active_rank_[q] < active_rank_[i] ? pair_key(q, i) : pair_key(i, q);
         consider(c, keys[c - begin]);
       }
     }
     lists.best[i] = best;
-  };
+  }
 
-  {
-    // First round: the facets' mesh neighbours.
-    const FacetFans fans = facet_fans(mesh, settings.max_neighbors, position);
-    if (n > 1) {
-      current.reset(std::uint32_t(n), fans.bound + 2 * std::size_t(window) * n, store_keys);
-      stamp.swap(position);  // no longer needed: its pages serve again
-      stamp.assign(n, kNone);
-      for (std::uint32_t p = 0; p < n; ++p) {
-        // Prefetch the fans a few positions ahead (facets in Morton order are scattered in the
-        // mesh's order): the corners, then their fans' offsets, then the fans.
-        if (p + 16 < n) prefetch(&fans.corners[3 * std::size_t(active[p + 16])]);
-        if (p + 8 < n) {
-          const std::uint32_t* c = &fans.corners[3 * std::size_t(active[p + 8])];
-          for (int k = 0; k < 3; ++k)
-            if (c[k] != kNone) prefetch(&fans.offsets[c[k]]);
-        }
-        if (p + 4 < n) {
-          const std::uint32_t* c = &fans.corners[3 * std::size_t(active[p + 4])];
-          for (int k = 0; k < 3; ++k)
-            if (c[k] != kNone) prefetch(&fans.incident[fans.offsets[c[k]]]);
-          prefetch(&active_box[p + 4]);
-        }
-        std::uint32_t* const begin = current.codes.get() + current.offsets[p];
-        const std::uint32_t* end =
-            gather_facet_neighbors(fans, active[p], p, settings.max_neighbors, active.data(), stamp.data(), begin);
-        const std::uint32_t count = std::uint32_t(end - begin);
-        for (std::uint32_t k = 0; k < count; ++k) begin[k] *= 2;
-        build_list(current, p, std::uint32_t(n), count, nullptr, p);
+  // The first round's candidate lists: each facet's mesh neighbours (facet_fans) and Morton
+  // neighbours. `position`: each facet's position (order_facets); its storage is reused.
+  void list_mesh_neighbors(std::vector<std::uint32_t> position) {
+    const FacetFans fans = facet_fans(mesh_, settings_.max_neighbors, position);
+    if (n_ <= 1) return;
+    current_.reset(std::uint32_t(n_), fans.bound + 2 * std::size_t(window_) * n_, store_keys_);
+    stamp_.swap(position);  // no longer needed: its pages serve again
+    stamp_.assign(n_, kNone);
+    for (std::uint32_t p = 0; p < n_; ++p) {
+      // Prefetch the fans a few positions ahead (facets in Morton order are scattered in the
+      // mesh's order): the corners, then their fans' offsets, then the fans.
+      if (p + 16 < n_) prefetch(&fans.corners[3 * std::size_t(active_[p + 16])]);
+      if (p + 8 < n_) {
+        const std::uint32_t* c = &fans.corners[3 * std::size_t(active_[p + 8])];
+        for (int k = 0; k < 3; ++k)
+          if (c[k] != kNone) prefetch(&fans.offsets[c[k]]);
       }
+      if (p + 4 < n_) {
+        const std::uint32_t* c = &fans.corners[3 * std::size_t(active_[p + 4])];
+        for (int k = 0; k < 3; ++k)
+          if (c[k] != kNone) prefetch(&fans.incident[fans.offsets[c[k]]]);
+        prefetch(&active_box_[p + 4]);
+      }
+      std::uint32_t* const begin = current_.codes.get() + current_.offsets[p];
+      const std::uint32_t* end =
+          gather_facet_neighbors(fans, active_[p], p, settings_.max_neighbors, active_.data(), stamp_.data(), begin);
+      const std::uint32_t count = std::uint32_t(end - begin);
+      for (std::uint32_t k = 0; k < count; ++k) begin[k] *= 2;
+      build_list(current_, p, std::uint32_t(n_), count, nullptr, p);
     }
   }
-  std::vector<std::uint32_t> partner, stack, group, group_first;
-  std::uint32_t next_node = std::uint32_t(n);
-  group_first.reserve(n);
-  while (active.size() > 1) {
-    const std::uint32_t m = std::uint32_t(active.size());
-    ++local.rounds;
-    local.candidate_pairs += current.offsets[m] / 2;
 
-    // Greedy maximal matching, cheapest first.
+  // Greedy maximal matching of the m active nodes, cheapest first: partner_.
+  void match(std::uint32_t m) {
     greedy_matching(
-        current,
-        [&](std::uint32_t slot, std::uint32_t u, std::uint32_t v) { return candidate_key(current, slot, u, v); },
-        active_order, m, partner, stack);
+        current_,
+        [&](std::uint32_t slot, std::uint32_t u, std::uint32_t v) { return candidate_key(current_, slot, u, v); },
+        active_order_, m, partner_, stack_);
+  }
 
-    // Parents for pairs (children in Morton order), carried nodes as they are: group g, the next
-    // round's position, in the order of the groups' first positions.
-    group.assign(m, kNone);
-    group_first.clear();
-    next_active.clear();
-    next_box.clear();
-    next_order.clear();
+  // Parents for pairs (children in Morton order), carried nodes as they are: group g, the next
+  // round's position, in the order of the groups' first positions (group_, group_first_, and the
+  // next_ arrays but for the ranks). Returns the number of groups.
+  std::uint32_t merge_pairs(std::uint32_t m) {
+    group_.assign(m, kNone);
+    group_first_.clear();
+    next_active_.clear();
+    next_box_.clear();
+    next_order_.clear();
     for (std::uint32_t p = 0; p < m; ++p) {
-      if (group[p] != kNone) continue;
-      const std::uint32_t q = partner[p];
-      const std::uint32_t g = std::uint32_t(next_active.size());
-      group[p] = g;
-      group_first.push_back(p);
+      if (group_[p] != kNone) continue;
+      const std::uint32_t q = partner_[p];
+      const std::uint32_t g = std::uint32_t(next_active_.size());
+      group_[p] = g;
+      group_first_.push_back(p);
       if (q == kNone) {
-        next_active.push_back(active[p]);
-        next_box.push_back(active_box[p]);
-        next_order.push_back(active_order[p]);
+        next_active_.push_back(active_[p]);
+        next_box_.push_back(active_box_[p]);
+        next_order_.push_back(active_order_[p]);
         continue;
       }
-      group[q] = g;
-      const bool p_first = active_rank[p] < active_rank[q];
-      const std::uint32_t a = active[p_first ? p : q], b = active[p_first ? q : p];
-      if (fit_during_rounds) volumes.push_back(Volume::enclosing(volumes[a], volumes[b]));
-      children.push_back(a);
-      children.push_back(b);
-      next_active.push_back(next_node++);
-      next_box.push_back(BoxF::enclosing(active_box[p], active_box[q]));
-      next_order.push_back(std::min(active_order[p], active_order[q]));
+      group_[q] = g;
+      const bool p_first = active_rank_[p] < active_rank_[q];
+      const std::uint32_t a = active_[p_first ? p : q], b = active_[p_first ? q : p];
+      if (fit_during_rounds_) volumes_.push_back(Volume::enclosing(volumes_[a], volumes_[b]));
+      children_.push_back(a);
+      children_.push_back(b);
+      next_active_.push_back(next_node_++);
+      next_box_.push_back(BoxF::enclosing(active_box_[p], active_box_[q]));
+      next_order_.push_back(std::min(active_order_[p], active_order_[q]));
     }
-    const std::uint32_t next_m = std::uint32_t(next_active.size());
-    BOXTREE_ASSERT(next_m < m, "a round always pairs at least one node");
-    if (next_m == 1) {
-      active.swap(next_active);
-      break;
-    }
-    // Morton order of the groups, ties as if the groups were numbered in Morton order of their
-    // first members (as they would be with positions in Morton order).
-    morton_order(next_box.data(), next_m, [&](std::uint32_t g) {
-      const std::uint32_t p = group_first[g], q = partner[p];
-      return q == kNone ? active_rank[p] : std::min(active_rank[p], active_rank[q]);
-    });
-    next_rank.resize(next_m);
-    for (std::uint32_t i = 0; i < next_m; ++i) next_rank[morton[i].second] = i;
+    return std::uint32_t(next_active_.size());
+  }
 
-    // The next round's lists: a group's mesh neighbours are its members' mesh neighbours' groups.
-    // Morton neighbours and keys need the next round's boxes, ranks and orders.
-    active.swap(next_active);
-    active_box.swap(next_box);
-    active_rank.swap(next_rank);
-    active_order.swap(next_order);
-    stamp.assign(next_m, kNone);
-    next.reset(next_m, current.offsets[m] + 2 * std::size_t(window) * next_m, store_keys);
+  // Morton order of the next_m groups (next_rank_), ties as if the groups were numbered in Morton
+  // order of their first members (as they would be with positions in Morton order).
+  void order_groups(std::uint32_t next_m) {
+    morton_order(next_box_.data(), next_m, [&](std::uint32_t g) {
+      const std::uint32_t p = group_first_[g], q = partner_[p];
+      return q == kNone ? active_rank_[p] : std::min(active_rank_[p], active_rank_[q]);
+    });
+    next_rank_.resize(next_m);
+    for (std::uint32_t i = 0; i < next_m; ++i) next_rank_[morton_[i].second] = i;
+  }
+
+  // The next round: the groups become the active nodes, and their lists are built from the m
+  // current lists. A group's mesh neighbours are its members' mesh neighbours' groups; Morton
+  // neighbours and keys need the next round's boxes, ranks and orders.
+  void contract_lists(std::uint32_t m, std::uint32_t next_m) {
+    active_.swap(next_active_);
+    active_box_.swap(next_box_);
+    active_rank_.swap(next_rank_);
+    active_order_.swap(next_order_);
+    stamp_.assign(next_m, kNone);
+    next_.reset(next_m, current_.offsets[m] + 2 * std::size_t(window_) * next_m, store_keys_);
     for (std::uint32_t i = 0; i < next_m; ++i) {
-      std::uint32_t* const begin = next.codes.get() + next.offsets[i];
+      std::uint32_t* const begin = next_.codes.get() + next_.offsets[i];
       std::uint32_t* end = begin;
-      stamp[i] = i;  // drops i itself
-      for (const std::uint32_t p : {group_first[i], partner[group_first[i]]}) {
+      stamp_[i] = i;  // drops i itself
+      for (const std::uint32_t p : {group_first_[i], partner_[group_first_[i]]}) {
         if (p == kNone) break;
-        for (std::uint32_t j = current.offsets[p], j_end = current.offsets[p + 1]; j < j_end; ++j) {
+        for (std::uint32_t j = current_.offsets[p], j_end = current_.offsets[p + 1]; j < j_end; ++j) {
           // Without branches (taken at random): skip Morton neighbours only and groups listed.
-          const std::uint32_t code = current.codes[j];
-          const std::uint32_t r = group[code >> 1];
-          const bool add = !(code & 1) & (stamp[r] != i);
-          stamp[r] = add ? i : stamp[r];
+          const std::uint32_t code = current_.codes[j];
+          const std::uint32_t r = group_[code >> 1];
+          const bool add = !(code & 1) & (stamp_[r] != i);
+          stamp_[r] = add ? i : stamp_[r];
           *end = 2 * r;
           end += add;
         }
       }
-      build_list(next, i, next_m, std::uint32_t(end - begin), morton.data(), active_rank[i]);
+      build_list(next_, i, next_m, std::uint32_t(end - begin), morton_.data(), active_rank_[i]);
     }
-    std::swap(current, next);
+    std::swap(current_, next_);
   }
 
-  // Final layout: depth-first from the root, the two children of a node in adjacent slots after
-  // their parent; a parent's volume is computed (or copied) once its children's are, in the
-  // same traversal.
-  const std::size_t node_count = 2 * n - 1;
-  BOXTREE_ASSERT(children.size() == 2 * (n - 1), "a binary tree over n leaves has n-1 parents");
-  const std::uint32_t leaf_flag = Tree<Volume>::kLeafFlag;
-  std::vector<std::uint32_t> out_links(node_count);
-  std::vector<Volume> out_volumes(node_count);
-  int height = 0;
-  {
-    struct Visit {
-      std::uint32_t node, slot, depth;
-      bool children_done;
-    };
-    std::vector<Visit> visits{{active[0], 0, 0, false}};
-    std::uint32_t next_slot = 1;
-    while (!visits.empty()) {
-      Visit& v = visits.back();
-      const std::uint32_t slot = v.slot;
-      if (v.node < n) {
-        const FacetId f = v.node;
-        out_links[slot] = leaf_flag | f;
-        out_volumes[slot] = fit_during_rounds
-                                ? volumes[f]
-                                : Volume::from_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
-        height = std::max(height, int(v.depth));
-        visits.pop_back();
-      } else if (v.children_done) {
-        const std::uint32_t c = out_links[slot];
-        out_volumes[slot] = fit_during_rounds ? volumes[v.node] : Volume::enclosing(out_volumes[c], out_volumes[c + 1]);
-        visits.pop_back();
-      } else {
-        v.children_done = true;
-        const std::uint32_t c = next_slot, depth = v.depth + 1;
-        const std::size_t k = 2 * (std::size_t(v.node) - n);
-        out_links[slot] = c;
-        next_slot += 2;
-        const std::uint32_t first_child = children[k], second_child = children[k + 1];
-        visits.push_back({second_child, c + 1, depth, false});  // invalidates v
-        visits.push_back({first_child, c, depth, false});
-      }
-    }
-  }
-  if constexpr (!kIsAabb && !is_hybrid_v<Volume>) {
-    if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out_volumes, out_links, settings.cost);
-  }
+  const TriangleMesh& mesh_;
+  const BuildSettings& settings_;
+  const std::size_t n_;
+  const bool fit_during_rounds_;
+  const bool store_keys_;
+  const bool volume_cost_;
+  const std::uint32_t window_;
+  std::vector<Volume> volumes_;  // by build index, when fit_during_rounds_
+  // The children of parent b (build index n + k): children_[2 k], children_[2 k + 1].
+  std::vector<std::uint32_t> children_;
+  std::uint32_t next_node_;  // the next parent's build index
+  Real area_scale_ = 1;
+  Real volume_scale_ = 1;
+  Vec3 origin_ = Vec3::Zero();
+  Real unit_ = 1;
+  Real box_area_scale_ = 1;
+  Real box_volume_scale_ = 1;
+  // The active nodes by position: in the first round the Morton order of the facets, then each
+  // round's parents and carried nodes in the order of their first member's position (so that
+  // nodes stay near their neighbours in memory and the lists of one round are read in order
+  // while the next round's are built). Per position: the node, its box, its rank in the round's
+  // Morton order (which orders the members of a pair and gives the Morton neighbours).
+  std::vector<std::uint32_t> active_, next_active_;
+  std::vector<BoxF> active_box_, next_box_;
+  std::vector<std::uint32_t> active_rank_, next_rank_;
+  // Tie order: the smallest facet id below the node (as if positions kept the facets' order).
+  std::vector<std::uint32_t> active_order_, next_order_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> morton_, morton_scratch_;
+  // The candidate lists of the current round (positions 0..m-1) and those being built for the
+  // next one.
+  CandidateLists current_, next_;
+  std::vector<std::uint32_t> stamp_;
+  std::vector<std::uint32_t> partner_, stack_, group_, group_first_;
+  BuildStats stats_;
+};
 
+}  // namespace
+
+template <class Volume>
+Tree<Volume> build_tree(std::shared_ptr<const TriangleMesh> mesh_ptr, const BuildSettings& settings,
+                        BuildStats* stats) {
+  if constexpr (is_hybrid_v<Volume>) {
+    if (settings.hybrid_level < 1) throw Error("build_tree: a hybrid method needs hybrid_level >= 1");
+    return make_hybrid(build_tree<typename Volume::Lower>(std::move(mesh_ptr), settings, stats), settings.hybrid_level,
+                       settings.parent_fit == ParentFit::fit_facets);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  check_mesh<Volume>(mesh_ptr.get());
+  if (settings.merge_rule) return build_by_rule<Volume>(std::move(mesh_ptr), settings.merge_rule, start, stats);
+  check_greedy_settings(settings);
+  GreedyBuild<Volume> build(*mesh_ptr, settings);
+  TreeLayout<Volume> out = build.layout(build.pair_up());
+  if constexpr (!std::is_same_v<Volume, Aabb> && !is_hybrid_v<Volume>) {
+    if (settings.parent_fit == ParentFit::fit_facets) fit_parents_to_facets(out.volumes, out.links, settings.cost);
+  }
+  BuildStats local = build.stats();
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = local;
-  return Tree<Volume>(std::move(mesh_ptr), std::move(out_volumes), std::move(out_links), height);
+  return Tree<Volume>(std::move(mesh_ptr), std::move(out.volumes), std::move(out.links), out.height);
 }
 
 #define BOXTREE_INSTANTIATE_BUILD(V) \

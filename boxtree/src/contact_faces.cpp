@@ -2,46 +2,36 @@
 // contact_triangle_faces (contact.h): mesh-vs-mesh contacts along face normals.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "boxtree/contact.h"
 #include "boxtree/geometry.h"
+#include "contact_internal.h"
 
 namespace boxtree {
 namespace {
 
-struct Polygon {
-  Vec3 points[9];  // a triangle clipped by three planes has at most 6 corners
-  int count = 0;
-};
-
-// Sutherland-Hodgman: keeps the part of `in` with (p - origin) . normal <= 0.
-Polygon clip(const Polygon& in, const Vec3& origin, const Vec3& normal) {
-  Polygon out;
-  for (int i = 0; i < in.count; ++i) {
-    const Vec3& p = in.points[i];
-    const Vec3& q = in.points[(i + 1) % in.count];
-    const Real dp = (p - origin).dot(normal), dq = (q - origin).dot(normal);
-    if (dp <= 0) out.points[out.count++] = p;
-    if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) out.points[out.count++] = p + (q - p) * (dp / (dp - dq));
-  }
-  return out;
-}
-
 // Points of triangle `t` inside the prism over face `f` (unit normal n) within `margin` of its
 // front: (point, signed height over the face).
 int clip_to_prism(const Vec3* t, const Vec3* f, const Vec3& n, Real margin, Vec3* points, Real* heights) {
-  Polygon poly;
-  poly.count = 3;
-  for (int k = 0; k < 3; ++k) poly.points[k] = t[k];
-  for (int k = 0; k < 3 && poly.count > 0; ++k) {
-    const Vec3 edge = f[(k + 1) % 3] - f[k];
-    poly = clip(poly, f[k], edge.cross(n));  // outward side plane of a counter-clockwise face
+  // A triangle clipped by three planes has at most 6 corners.
+  Vec3 buffer_a[6] = {t[0], t[1], t[2]};
+  Vec3 buffer_b[6];
+  Vec3* in = buffer_a;
+  Vec3* next = buffer_b;
+  int corners = 3;
+  for (int k = 0; k < 3 && corners > 0; ++k) {
+    const Vec3& origin = f[k];
+    const Vec3 outward = (f[(k + 1) % 3] - f[k]).cross(n);  // the side plane of a counter-clockwise face
+    corners = detail::clip_polygon(
+        in, corners, [&](const Vec3& x) { return (x - origin).dot(outward); }, next);
+    std::swap(in, next);
   }
   int count = 0;
-  for (int i = 0; i < poly.count; ++i) {
-    const Real h = (poly.points[i] - f[0]).dot(n);
+  for (int i = 0; i < corners; ++i) {
+    const Real h = (in[i] - f[0]).dot(n);
     if (h <= margin) {
-      points[count] = poly.points[i];
+      points[count] = in[i];
       heights[count++] = h;
     }
   }

@@ -29,6 +29,7 @@
 #include <limits>
 
 #include "boxtree/error.h"
+#include "internal.h"
 
 namespace boxtree::detail {
 namespace {
@@ -815,25 +816,31 @@ Mat3 principal_axes(const Vec3* points, std::size_t count) {
 
 // Andrew's monotone chain (Andrew 1979) with the exact orientation predicate: pops every
 // non-left turn, so collinear points and duplicates never survive.
+int convex_hull_2d(Vec2* points, int count, Vec2* hull) {
+  std::sort(points, points + count,
+            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  count = int(std::unique(points, points + count) - points);
+  if (count <= 2) {
+    std::copy(points, points + count, hull);
+    return count;
+  }
+  int size = 0;
+  for (int i = 0; i < count; ++i) {  // lower chain, left to right
+    while (size >= 2 && orient_sign(hull[size - 2], hull[size - 1], points[i]) <= 0) --size;
+    hull[size++] = points[i];
+  }
+  const int lower_size = size;
+  for (int i = count - 1; i-- > 0;) {  // upper chain, right to left
+    while (size > lower_size && orient_sign(hull[size - 2], hull[size - 1], points[i]) <= 0) --size;
+    hull[size++] = points[i];
+  }
+  return size - 1;  // the last point repeats the first
+}
+
 std::vector<Vec2> convex_hull_2d(std::vector<Vec2> points) {
   BOXTREE_ASSERT(all_finite(points), "convex_hull_2d: non-finite point");
-  std::sort(points.begin(), points.end(),
-            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  points.erase(std::unique(points.begin(), points.end()), points.end());
-  if (points.size() <= 2) return points;
   std::vector<Vec2> hull(2 * points.size());
-  std::size_t size = 0;
-  for (const Vec2& p : points) {  // lower chain, left to right
-    while (size >= 2 && orient_sign(hull[size - 2], hull[size - 1], p) <= 0) --size;
-    hull[size++] = p;
-  }
-  const std::size_t lower_size = size;
-  for (std::size_t i = points.size() - 1; i-- > 0;) {  // upper chain, right to left
-    const Vec2& p = points[i];
-    while (size > lower_size && orient_sign(hull[size - 2], hull[size - 1], p) <= 0) --size;
-    hull[size++] = p;
-  }
-  hull.resize(size - 1);  // the last point repeats the first
+  hull.resize(std::size_t(convex_hull_2d(points.data(), int(points.size()), hull.data())));
   return hull;
 }
 

@@ -22,6 +22,13 @@ bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb)
 // threshold. Defined in volume_obb.cpp.
 void orthonormal_completion(const Vec3& n, Vec3& b1, Vec3& b2);
 
+// The convex hull of points[0..count), as convex_hull_2d of detail/fit.h without allocating:
+// counter-clockwise from the lexicographically smallest point, without collinear or duplicate
+// points, exact (Andrew's monotone chain on an exact orientation test); 0, 1 or 2 points for
+// degenerate input. Sorts `points` in place, writes the hull to `hull` (room for 2 * count
+// points) and returns its size. Finite input only (not checked). Defined in fit.cpp.
+int convex_hull_2d(Vec2* points, int count, Vec2* hull);
+
 // The final layout of a tree built by a MergeRule (build.cpp): nodes in build order
 // (leaves 0..leaf_count-1 are the facets, parents after, children `first`/`second`) laid out
 // depth-first from `root` with the two children of a node in adjacent slots, as Tree expects.

@@ -85,9 +85,8 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
 // does (a face is kept only if its patch holds the depth; else the edge pair or the triangle's
 // face). For hulls this replaces GJK/EPA (contact_convex_triangle with support_points): exact
 // instead of ~1e-6 of the sizes, several points where a face rests on the triangle, no
-// iteration. Its cost grows with the corners: against GJK/EPA on the same points (random hulls,
-// triangles at their bottom, scratch measurement, ±20% run to run) 4.5x faster at 8 corners,
-// 1.9-2.5x at 12 to 16, 1.2-1.4x at 24, about even at 32 to 48, 1.4x slower at 64.
+// iteration. Its cost grows with the corners, faster than GJK/EPA's: for hulls of many corners
+// the support mapping can be the cheaper route (bench/RESULTS.md, narrowphase notes).
 int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
                                 const ContactOptions& options, ContactPoint* out);
 
@@ -116,10 +115,11 @@ int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec
 // normal, the axis, axis x edge, radial directions to the corners, the edges' in-plane normals);
 // the curved case (a rim against an edge) has its normal across the edge and is searched along
 // those three circles of normals, then polished. No GJK/EPA runs except behind a one-sided
-// triangle or for degenerate input (about 0.3% of random deep overlaps end in another basin than
-// contact_convex_triangle's, either way). When the
-// normal is the triangle's, a patch: the ends of the side's lowest line and points of the lower
-// disk's rim over the triangle (a cylinder lying or standing on a facet), each at its own depth.
+// triangle or for degenerate input. This and contact_convex_triangle are both local searches: on
+// deep overlaps they can end in different local minima (rarely; either may find the deeper one).
+// When the normal is the triangle's, a patch: the ends of the side's lowest line and points of
+// the lower disk's rim over the triangle (a cylinder lying or standing on a facet), each at its
+// own depth.
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
                               const ContactOptions& options, ContactPoint* out);
 

@@ -1,0 +1,136 @@
+// SPDX-License-Identifier: MIT
+// reduce_contacts (contact.h) and its array form reduce_in_place (contact_internal.h): merging
+// near-duplicate contacts, then keeping the deepest and greedily the points that spread the set
+// the most (the area of their convex hull, convex_hull_2d of internal.h, across the deepest
+// contact's normal).
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "boxtree/contact.h"
+#include "contact_internal.h"
+#include "internal.h"
+
+namespace boxtree {
+namespace detail {
+namespace {
+
+// Twice the signed area of the triangle (o, a, b): positive when it turns counter-clockwise.
+Real cross_2d(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+// Twice the area that q adds to the convex polygon `hull` (counter-clockwise, h vertices; a
+// segment or a point when h < 3): the triangles from q to the edges that face it.
+Real added_area_2d(const Vec2* hull, int h, const Vec2& q) {
+  if (h == 1) return 0;
+  if (h == 2) return std::abs(cross_2d(hull[0], hull[1], q));
+  Real added = 0;
+  for (int i = 0; i < h; ++i) {
+    const Real c = cross_2d(hull[i], hull[(i + 1) % h], q);
+    if (c < 0) added -= c;
+  }
+  return added;
+}
+
+}  // namespace
+
+int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance, int* merged) {
+  if (merged) *merged = 0;
+  if (count <= 0) return 0;
+  std::sort(contacts, contacts + count, [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+  // Near-duplicates: same place and normals within ~10 degrees; the deeper one (earlier) stays.
+  const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
+  const Real merge_squared = merge_distance * merge_distance;
+  int kept = 0;
+  for (int i = 0; i < count; ++i) {
+    bool duplicate = false;
+    for (int j = 0; j < kept && !duplicate; ++j) {
+      duplicate = (contacts[i].position - contacts[j].position).squaredNorm() <= merge_squared &&
+                  contacts[i].normal.dot(contacts[j].normal) >= cos_merge;
+    }
+    if (!duplicate) contacts[kept++] = contacts[i];
+  }
+  if (merged) *merged = count - kept;
+  if (kept <= max_count) return kept;
+
+  // Keep the deepest, then greedily the point that makes the largest hull (in the plane across
+  // the deepest contact's normal), ties (collinear sets) broken by the distance to the chosen set.
+  // The hull of the chosen set is kept, so a candidate costs the area it adds (its visible edges)
+  // and its distance is updated once per choice: O(max_count * n * hull) in all.
+  Vec3 u;
+  Vec3 w;
+  detail::orthonormal_completion(contacts[0].normal.normalized(), u, w);
+  const int n = std::min(kept, 64);
+  std::array<Vec2, 64> planar;
+  planar.fill(Vec2::Zero());      // only [0, n) is read; GCC cannot tell
+  std::array<Real, 64> distance;  // squared, to the nearest chosen point
+  std::array<bool, 64> chosen{};
+  Real extent_squared = 0;
+  for (int i = 0; i < n; ++i) {
+    planar[i] = Vec2(contacts[i].position.dot(u), contacts[i].position.dot(w));
+    distance[i] = (contacts[i].position - contacts[0].position).squaredNorm();
+    extent_squared = std::max(extent_squared, distance[i]);
+  }
+  std::array<int, 64> order{};
+  std::array<Vec2, 64> points;
+  std::array<Vec2, 128> hull;  // room for 2 x 64 points (convex_hull_2d)
+  chosen[0] = true;
+  order[0] = 0;
+  int selected = 1;
+  int h = 1;
+  hull[0] = planar[0];
+  Real area = 0;  // twice the chosen set's hull area
+  while (selected < std::min(max_count, n)) {
+    int best = -1;
+    Real best_area = -1;
+    Real best_distance = -1;
+    for (int i = 0; i < n; ++i) {
+      if (chosen[i]) continue;
+      const Real candidate_area = area + added_area_2d(hull.data(), h, planar[i]);
+      // Areas compare with a slack (relative, and to the set's size for collinear sets, whose
+      // areas are rounding noise) so that rounding does not beat a real spread.
+      const Real slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
+      const bool better =
+          candidate_area > best_area + slack || (candidate_area >= best_area - slack && distance[i] > best_distance);
+      if (better) {
+        best = i;
+        best_area = candidate_area;
+        best_distance = distance[i];
+      }
+    }
+    if (best < 0) break;
+    chosen[best] = true;
+    order[selected++] = best;
+    for (int i = 0; i < n; ++i) {
+      distance[i] = std::min(distance[i], (contacts[i].position - contacts[best].position).squaredNorm());
+    }
+    for (int s = 0; s < selected; ++s) points[s] = planar[order[s]];
+    h = detail::convex_hull_2d(points.data(), selected, hull.data());
+    area = 0;
+    for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[(i + 1) % h]);
+  }
+  std::array<ContactPoint, 64> result;
+  for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];
+  std::sort(result.begin(), result.begin() + selected,
+            [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+  std::copy(result.begin(), result.begin() + selected, contacts);
+  return selected;
+}
+
+}  // namespace detail
+
+ReductionCounts reduce_contacts(std::vector<ContactPoint>& contacts, std::size_t max_count, Real merge_distance) {
+  // More than 64 contacts: the area-greedy selection looks at the deepest 64 (after merging).
+  const int limit = static_cast<int>(std::clamp<std::size_t>(max_count, 1, 1 << 20));
+  const std::size_t before = contacts.size();
+  int merged = 0;
+  contacts.resize(std::size_t(
+      detail::reduce_in_place(contacts.data(), static_cast<int>(contacts.size()), limit, merge_distance, &merged)));
+  ReductionCounts counts;
+  counts.merged = std::size_t(merged);
+  counts.dropped = before - std::size_t(merged) - contacts.size();
+  return counts;
+}
+
+}  // namespace boxtree
