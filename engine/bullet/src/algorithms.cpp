@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -359,8 +360,15 @@ void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const Algorith
     ConvexMeshAlgorithm::CreateFunc convex, swapped;
     MeshMeshAlgorithm::CreateFunc mesh_mesh;
   };
+  // Worlds may be set up from several threads at once (ThreadSanitizer found the list unguarded).
+  static std::mutex registrations_mutex;
   static std::vector<std::unique_ptr<Registration>> registrations;
-  auto& r = *registrations.emplace_back(std::make_unique<Registration>());
+  Registration* made = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(registrations_mutex);
+    made = registrations.emplace_back(std::make_unique<Registration>()).get();
+  }
+  auto& r = *made;
   r.settings = settings;
   r.convex.settings = &r.settings;
   r.swapped.settings = &r.settings;
