@@ -8,6 +8,7 @@
 //
 // The collider (collider.h) reads it; the engine adapters (engine/) make it from their users'
 // meshes and keep it in their shapes.
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -45,6 +46,11 @@ class CollisionMesh : public std::enable_shared_from_this<CollisionMesh> {
   // without that as two-sided whatever it is asked (ContactRequest::two_sided).
   bool consistent_winding() const { return inconsistent_edges_ == 0; }
   std::size_t inconsistent_edges() const { return inconsistent_edges_; }
+  // True once, the first time it is asked of an inconsistently wound mesh (false for a consistent
+  // one): for an engine adapter's one-time message. Thread-safe.
+  bool first_winding_report() const {
+    return !consistent_winding() && !winding_reported_.exchange(true, std::memory_order_relaxed);
+  }
 
   // This mesh's tree with `method`'s volume kind, for tree-vs-tree against a mesh of another
   // method: the own tree when the kinds agree, else a tree of `method` built on first use and
@@ -73,6 +79,7 @@ class CollisionMesh : public std::enable_shared_from_this<CollisionMesh> {
   std::size_t inconsistent_edges_ = 0;
   Vec3 scale_ = Vec3::Ones();
   bool mirrored_ = false;
+  mutable std::atomic<bool> winding_reported_{false};
 
   mutable std::mutex cache_mutex_;
   mutable std::vector<std::unique_ptr<const AnyTree>> converted_;  // stable addresses: tree_as returns references

@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <mutex>
-#include <set>
 #include <string>
 
 #include "convert.h"
@@ -144,15 +142,9 @@ BoxtreeMeshShape::BoxtreeMeshShape(std::shared_ptr<const CollisionMesh> mesh) : 
 }
 
 namespace {
-// One line on stderr per mesh, the first time a shape is made from it.
-void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
-  if (mesh.consistent_winding()) return;
-  static std::mutex mutex;
-  static std::set<const void*> warned;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!warned.insert(mesh.tree().identity()).second) return;
-  }
+// One line on stderr per collision mesh, the first time a shape is made from it.
+void warn_if_inconsistently_wound(const CollisionMesh& mesh) {
+  if (!mesh.first_winding_report()) return;
   std::fprintf(stderr,
                "boxtree: a mesh of %zu facets has %zu edges whose two facets are wound the same way, so its "
                "facets have no consistent front; its BoxtreeMeshShapes collide two-sided. Wind every facet "
@@ -163,7 +155,7 @@ void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
 
 void BoxtreeMeshShape::init() {
   m_shapeType = FAST_CONCAVE_MESH_PROXYTYPE;
-  warn_once_if_inconsistently_wound(*m_base);
+  warn_if_inconsistently_wound(*m_base);
   m_collision = m_base;
   m_localAabbMin = to_bt(m_collision->bounds().min);
   m_localAabbMax = to_bt(m_collision->bounds().max);

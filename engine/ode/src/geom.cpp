@@ -6,7 +6,6 @@
 #include <cmath>
 #include <map>
 #include <mutex>
-#include <set>
 #include <string>
 #include <tuple>
 #include <unordered_map>
@@ -67,15 +66,10 @@ void class_dtor(dGeomID geom) {
 
 dColliderFn* class_collider(int other_class) { return collider_for(other_class); }
 
-// One message per mesh, the first time a geom is made from it, through ODE's message handler.
-void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
-  if (mesh.consistent_winding()) return;
-  static std::mutex mutex;
-  static std::set<const void*> warned;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!warned.insert(mesh.tree().identity()).second) return;
-  }
+// One message per collision mesh, the first time a geom is made from it, through ODE's message
+// handler.
+void warn_if_inconsistently_wound(const CollisionMesh& mesh) {
+  if (!mesh.first_winding_report()) return;
   dMessage(0,
            "boxtree: a mesh of %zu facets has %zu edges whose two facets are wound the same way, so its facets "
            "have no consistent front; its geoms collide two-sided (GeomSettings::two_sided). Wind every facet "
@@ -85,7 +79,7 @@ void warn_once_if_inconsistently_wound(const CollisionMesh& mesh) {
 
 dGeomID create_geom(dSpaceID space, std::shared_ptr<const CollisionMesh> mesh) {
   if (!mesh) throw Error("dCreateBoxtreeMesh: no collision mesh");
-  warn_once_if_inconsistently_wound(*mesh);
+  warn_if_inconsistently_wound(*mesh);
   auto object = std::make_unique<GeomObject>();
   object->mesh = std::move(mesh);
   const int class_number = dBoxtreeInit();
