@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
-// The ODE drop scene's terrain pairs, replayed: the scene settles for some steps (OPCODE's
-// midphase), then both the built-in OPCODE world and boxtree's world are put at those very poses
+// The drop scene's terrain pairs, replayed (ODE, or with --engine bullet Bullet: there the pairs
+// of the terrain and of the mesh bodies): the scene settles for some steps (the engine's built-in
+// midphase), then both the built-in world and boxtree's world are put at those very poses
 // and every terrain-body pair is collided again and again, without stepping. The same pairs at the
 // same poses for both, so the time per call of each body shape compares directly, and a profiler
 // can be pointed at one shape (--only) without the rest of the step around it.
@@ -20,18 +21,19 @@
 #include "sim.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"ODE drop scene: the terrain-body pairs at one moment, replayed, built-in vs boxtree"};
+  CLI::App app{"Drop scene: the terrain-body pairs at one moment, replayed, built-in vs boxtree"};
   int bodies = 500, cells = 256, settle = 160, repeats = 50, rounds = 3;
   std::uint64_t seed = 1;
-  std::string only_name, midphase = "both", method = "aabb";
+  std::string only_name, midphase = "both", method = "aabb", engine = "ode";
   app.add_option("--bodies", bodies, "Bodies in the scene")->capture_default_str();
   app.add_option("--cells", cells, "Terrain cells per side")->capture_default_str();
-  app.add_option("--settle", settle, "Steps before the replay (OPCODE's world)")->capture_default_str();
+  app.add_option("--settle", settle, "Steps before the replay (the built-in world)")->capture_default_str();
   app.add_option("--repeats", repeats, "Times every pair is collided")->capture_default_str();
   app.add_option("--rounds", rounds, "Replays per world, alternating; the fastest is kept")->capture_default_str();
   app.add_option("--seed", seed, "Scene seed")->capture_default_str();
   app.add_option("--only", only_name,
                  "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
+  app.add_option("--engine", engine, "ode or bullet")->capture_default_str()->check(CLI::IsMember({"ode", "bullet"}));
   app.add_option("--midphase", midphase, "builtin, boxtree or both")->capture_default_str();
   app.add_option("--method", method, "boxtree hierarchy method")->capture_default_str();
   int max_contacts = 8;
@@ -62,11 +64,12 @@ int main(int argc, char** argv) {
     demo::SimOptions boxtree_options = builtin_options;
     boxtree_options.boxtree_midphase = true;
     boxtree_options.method = method;
+    const auto make_simulation = engine == "bullet" ? demo::make_bullet_simulation : demo::make_ode_simulation;
     std::vector<demo::Pose> poses;
     {
-      // Settled by OPCODE's world, so that the poses do not depend on the boxtree code under test
-      // (A/B runs of two versions replay the very same pairs).
-      auto settling = demo::make_ode_simulation(scene, demo::SimOptions{});
+      // Settled by the built-in world, so that the poses do not depend on the boxtree code under
+      // test (A/B runs of two versions replay the very same pairs).
+      auto settling = make_simulation(scene, demo::SimOptions{});
       for (int i = 0; i < settle; ++i) settling->step(1.0 / 60);
       poses = settling->poses();
     }
@@ -77,7 +80,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<demo::Simulation> worlds[2];
     for (const bool use_boxtree : {false, true}) {
       if (midphase != "both" && use_boxtree != (midphase == "boxtree")) continue;
-      worlds[use_boxtree] = demo::make_ode_simulation(scene, use_boxtree ? boxtree_options : builtin_options);
+      worlds[use_boxtree] = make_simulation(scene, use_boxtree ? boxtree_options : builtin_options);
       if (!worlds[use_boxtree]->set_poses(poses)) throw boxtree::Error("the simulation cannot be posed");
     }
     for (int round = 0; round < rounds; ++round) {
@@ -90,10 +93,10 @@ int main(int argc, char** argv) {
       }
     }
     std::printf(
-        "ODE drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds, "
+        "%s drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds, "
         "%d contacts per call at most\n",
-        cells, bodies, settle, repeats, rounds, max_contacts);
-    std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs", "OPCODE us", "contacts",
+        engine == "bullet" ? "Bullet" : "ODE", cells, bodies, settle, repeats, rounds, max_contacts);
+    std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs", engine == "bullet" ? "Bullet us" : "OPCODE us", "contacts",
                 "triangles", "boxtree us", "contacts", "triangles", "ratio");
     double total[2] = {0, 0};
     for (const auto& [kind, both] : rows) {

@@ -55,14 +55,16 @@ class Simulation {
     std::uint64_t triangles = 0;  // handed to the narrowphase (as narrowphase_triangles())
   };
   virtual std::vector<PairKindTime> collision_breakdown() const { return {}; }
-  // For the pair benchmark (bench/sim/pair_replay.cpp), ODE only (Bullet: false / empty).
+  // For the pair benchmark (bench/sim/pair_replay.cpp).
   // Puts every body at `poses` (scene order), at rest. False if not supported.
   virtual bool set_poses(const std::vector<Pose>& poses) {
     (void)poses;
     return false;
   }
   // Collides the terrain with every body (of shape `only`, if given) `repeats` times at the
-  // current poses, making no joints; the time per kind, as collision_breakdown.
+  // current poses, making no joints; the time per kind, as collision_breakdown. ODE: every
+  // terrain-body pair; Bullet: every broadphase pair of the terrain or of a mesh body with a body
+  // (kinds terrain-<shape> and mesh-<shape>), each by its own collision algorithm.
   virtual std::vector<PairKindTime> replay_terrain_pairs(int repeats, const Shape* only = nullptr) {
     (void)repeats, (void)only;
     return {};

@@ -12,6 +12,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <map>
+#include <string>
 
 #include "boxtree/error.h"
 #include "sim.h"
@@ -173,6 +175,7 @@ class BulletSimulation final : public Simulation {
       body_info.m_rollingFriction = 0.02;
       body_info.m_spinningFriction = 0.02;
       bodies_.push_back(std::make_unique<btRigidBody>(body_info));
+      body_shapes_.push_back(spec.shape);
       world_->addRigidBody(bodies_.back().get());
     }
   }
@@ -200,15 +203,108 @@ class BulletSimulation final : public Simulation {
     return out;
   }
 
+  bool set_poses(const std::vector<Pose>& poses) override {
+    if (poses.size() != bodies_.size()) return false;
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      btTransform t;
+      t.setOrigin(bt(poses[i].position));
+      const Quat& q = poses[i].orientation;
+      t.setRotation(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())));
+      bodies_[i]->setWorldTransform(t);
+      bodies_[i]->setInterpolationWorldTransform(t);
+      bodies_[i]->setLinearVelocity(btVector3(0, 0, 0));
+      bodies_[i]->setAngularVelocity(btVector3(0, 0, 0));
+      bodies_[i]->activate(true);
+    }
+    // Bounds, broadphase pairs and each pair's algorithm for the new poses (not counted as
+    // collision time of the simulation).
+    const double seconds = world_->seconds;
+    world_->performDiscreteCollisionDetection();
+    world_->seconds = seconds;
+    return true;
+  }
+
+  // Every broadphase pair of the terrain or a mesh body with another body, collided `repeats`
+  // times by the pair's own algorithm (as btCollisionDispatcher::defaultNearCallback does), kinds
+  // "terrain-<shape>" and "mesh-<shape>".
+  std::vector<PairKindTime> replay_terrain_pairs(int repeats, const Shape* only) override {
+    struct Pair {
+      btBroadphasePair* pair;
+      std::string kind;
+    };
+    std::vector<Pair> pairs;
+    btOverlappingPairCache* cache = broadphase_->getOverlappingPairCache();
+    btBroadphasePairArray& array = cache->getOverlappingPairArray();
+    for (int i = 0; i < array.size(); ++i) {
+      btBroadphasePair& pair = array[i];
+      if (!pair.m_algorithm) continue;
+      const auto* a = static_cast<const btCollisionObject*>(pair.m_pProxy0->m_clientObject);
+      const auto* b = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
+      const auto kind_of = [&](const btCollisionObject* o, Shape* shape) {
+        for (std::size_t k = 0; k < bodies_.size(); ++k)
+          if (bodies_[k].get() == o) {
+            *shape = body_shapes_[k];
+            return 1;
+          }
+        return o == terrain_.get() ? 0 : -1;
+      };
+      Shape sa{}, sb{};
+      const int ka = kind_of(a, &sa), kb = kind_of(b, &sb);
+      if (ka < 0 || kb < 0) continue;
+      std::string kind;
+      if (ka == 0 || kb == 0) {
+        const Shape other = ka == 0 ? sb : sa;
+        if (only && other != *only) continue;
+        kind = std::string("terrain-") + shape_name(other);
+      } else if (sa == Shape::mesh || sb == Shape::mesh) {
+        const Shape other = sa == Shape::mesh ? sb : sa;
+        if (only && other != *only) continue;
+        kind = std::string("mesh-") + shape_name(other);
+      } else {
+        continue;
+      }
+      pairs.push_back({&pair, kind});
+    }
+    std::map<std::string, PairKindTime> kinds;
+    btDispatcherInfo& info = world_->getDispatchInfo();
+    btManifoldArray manifolds;
+    for (int r = 0; r < repeats; ++r) {
+      for (const Pair& p : pairs) {
+        const auto* a = static_cast<const btCollisionObject*>(p.pair->m_pProxy0->m_clientObject);
+        const auto* b = static_cast<const btCollisionObject*>(p.pair->m_pProxy1->m_clientObject);
+        const btCollisionObjectWrapper wa(nullptr, a->getCollisionShape(), a, a->getWorldTransform(), -1, -1);
+        const btCollisionObjectWrapper wb(nullptr, b->getCollisionShape(), b, b->getWorldTransform(), -1, -1);
+        btManifoldResult result(&wa, &wb);
+        const std::uint64_t triangles = narrowphase_triangles();
+        const auto start = std::chrono::steady_clock::now();
+        p.pair->m_algorithm->processCollision(&wa, &wb, info, &result);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        PairKindTime& t = kinds[p.kind];
+        t.kind = p.kind;
+        t.seconds += seconds;
+        ++t.calls;
+        t.triangles += narrowphase_triangles() - triangles;
+        manifolds.resize(0);
+        p.pair->m_algorithm->getAllContactManifolds(manifolds);
+        for (int m = 0; m < manifolds.size(); ++m) t.contacts += std::uint64_t(manifolds[m]->getNumContacts());
+      }
+    }
+    std::vector<PairKindTime> out;
+    for (auto& [kind, t] : kinds) out.push_back(t);
+    return out;
+  }
+
   int contacts() const override { return contacts_; }
   double collision_seconds() const override { return world_->seconds; }
   std::uint64_t narrowphase_triangles() const override {
     if (!boxtree_) return g_builtin_triangles.load() - builtin_triangles_at_start_;
     std::uint64_t total = 0;
 #if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
-    for (const auto& shape : shapes_)
-      if (const auto* mesh = dynamic_cast<const boxtree::bullet::BoxtreeMeshShape*>(shape.get()))
-        total += mesh->counters().narrowphase_triangles;
+    if (mesh_shapes_.empty())
+      for (const auto& shape : shapes_)
+        if (const auto* mesh = dynamic_cast<const boxtree::bullet::BoxtreeMeshShape*>(shape.get()))
+          mesh_shapes_.push_back(mesh);
+    for (const auto* mesh : mesh_shapes_) total += mesh->counters().narrowphase_triangles;
 #endif
     return total;
   }
@@ -234,6 +330,11 @@ class BulletSimulation final : public Simulation {
   std::vector<std::unique_ptr<btCollisionShape>> shapes_;
   std::unique_ptr<btRigidBody> terrain_;
   std::vector<std::unique_ptr<btRigidBody>> bodies_;
+  std::vector<Shape> body_shapes_;  // of bodies_, in scene order
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+  // The boxtree mesh shapes among shapes_ (filled on first use; shapes_ is complete by then).
+  mutable std::vector<const boxtree::bullet::BoxtreeMeshShape*> mesh_shapes_;
+#endif
   int contacts_ = 0;
   std::uint64_t builtin_triangles_at_start_ = 0;
 };
