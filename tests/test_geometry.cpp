@@ -642,6 +642,13 @@ TEST(GeometryTriangleAabb, AnalyticCases) {
   EXPECT_TRUE(triangle_overlaps_aabb(Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(0.6, 0.5, 1),
                                      Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}));
   EXPECT_FALSE(triangle_overlaps_aabb(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Aabb::empty()));
+  // A corner on the boundary of a half-space, with heights that are not short dyadics: the box
+  // clipped to the triangle's bounds touches it at that corner only (a facet of make_terrain(16,
+  // 16, 2) that the half-space query x <= 50 used to miss).
+  const Real inf = std::numeric_limits<Real>::infinity();
+  EXPECT_TRUE(triangle_overlaps_aabb(Vec3(50, 0, 3.3369014553087006), Vec3(56.25, 0, 3.9260098344930077),
+                                     Vec3(56.25, 6.25, 4.0246857479155578),
+                                     Aabb{Vec3::Constant(-inf), Vec3(50, inf, inf)}));
 }
 
 TEST(GeometryTriangleAabb, MatchesExactReferenceOnHalfIntegerGrid) {

@@ -472,6 +472,11 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
     if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;
     if (!(box.min[k] <= box.max[k])) return false;  // empty or NaN box
   }
+  // A corner in the box decides exactly. The axes below are rounded (the centre, the half
+  // extents), and a corner on the box's boundary could come out an ulp outside: every query with
+  // an infinite side is clipped to a box that the triangle touches at its boundary.
+  for (const Vec3* p : {&a, &b, &c})
+    if ((p->array() >= box.min.array()).all() && (p->array() <= box.max.array()).all()) return true;
   const Vec3 center = box.center();
   const Vec3 h = (box.max - box.min) * Real(0.5);
   const Vec3 v[3] = {a - center, b - center, c - center};
