@@ -98,10 +98,16 @@ struct DropScene {
 // own count with gcc, 6.0% with clang -> 7%. Those figures are from the scene's earlier
 // std::mt19937 draws; with the tests' splitmix64 generator (support/random.h), gcc: at rest 2.0 cm
 // (Bullet's own), 0.23 (boxtree analytic), 2.2 (GJK); 8 of 40 still moving with Bullet's own shape
-// (4 and 6 with boxtree) -> 9; contact points within 1.7%. Clang not remeasured.
+// (4 and 6 with boxtree) -> 9; contact points within 1.7%. Clang not remeasured. Since the
+// collider keeps an engine's contacts to the request's margin (Bullet's GJK reported up to twice
+// the breaking distance, contacts the manifold then threw away), the all-GJK world rests with
+// 134.4 points against Bullet's 145.2 (0.926) on this scene, and 138.0 against 140.0 with the
+// scene's seed 20 (before: 145.8 and 140.3): the trajectories differ, and which bodies rest on an
+// edge with fewer points with them (at identical poses, BulletTraps.HullsGetTheManifoldPointsOf-
+// BulletsOwnShape) -> 10%.
 constexpr Real kDropDepthAllowance = 0.03;
 constexpr int kDropMovingAllowance = 9;
-constexpr double kDropContactRatioAllowance = 0.07;
+constexpr double kDropContactRatioAllowance = 0.10;
 
 TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
   const TriangleMesh terrain = make_terrain(32, 32, 4, 50, 6);
