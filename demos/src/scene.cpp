@@ -306,6 +306,21 @@ int hull_points_of(BodyMix mix) {
   }
 }
 
+// `count` points on the unit sphere, spread evenly (a Fibonacci lattice: z in even steps, longitude
+// by the golden angle), jittered and turned at random. Evenly spread, their hull holds the origin
+// well inside (ODE's convexes need it; independent random points can all fall on one side).
+std::vector<Vec3> points_around_sphere(int count, boxtree::Random& random) {
+  const Quat turn(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), random.unit_vector()));
+  const Real golden_angle = kPi * (3 - std::sqrt(Real(5)));
+  std::vector<Vec3> points;
+  for (int k = 0; k < count; ++k) {
+    const Real z = 1 - (2 * k + 1) / Real(count), r = std::sqrt(1 - z * z), phi = golden_angle * k;
+    const Vec3 even(r * std::cos(phi), r * std::sin(phi), z);
+    points.push_back(turn * (even + random.uniform_vec3(-0.15, 0.15)).normalized());
+  }
+  return points;
+}
+
 }  // namespace
 
 Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
@@ -382,12 +397,10 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
         b.colour = {0.6, 0.35, 0.85};
         break;
       case Shape::convex: {
-        // A stretched icosahedron, or the hull of random points on a sphere (all are corners):
-        // any linear map keeps a convex polyhedron convex.
+        // A stretched icosahedron, or the hull of points on a sphere (all are corners): any
+        // linear map keeps a convex polyhedron convex.
         if (const int points = hull_points_of(options.mix)) {
-          std::vector<Vec3> on_sphere;
-          for (int k = 0; k < points; ++k) on_sphere.push_back(random.unit_vector());
-          mesh = convex_hull(on_sphere);
+          mesh = convex_hull(points_around_sphere(points, random));
         } else {
           mesh = make_icosahedron(1);
         }
