@@ -8,7 +8,7 @@
 // Each run has two measured phases, the same steps for both midphases:
 //   falling   from the first step until the highest body has had time to fall to the ground and
 //             land: sqrt(2 h / g) + 0.5 s, h the largest drop height over the terrain;
-//   at rest   after a further settling time (0.5 s, not measured): the next 0.5 s.
+//   at rest   after a further settling time (1 s, not measured): the next 1 s.
 // Per phase: collision ms per step (Bullet: performDiscreteCollisionDetection; ODE: dSpaceCollide
 // with the near callback), contacts per step, and the collision time by pair kind (sim.h
 // collision_breakdown: a body's pairs with the terrain by its shape, and body-body). At the end:
@@ -370,7 +370,7 @@ int main(int argc, char** argv) {
   CLI::App app{"The drop scene in many variants, Bullet and ODE: built-in mesh midphase vs boxtree, in one run"};
   std::string json_path, markdown_path, engines_text = "bullet,ode", only;
   int cells = 256;
-  double settle_seconds = 0.5, rest_seconds = 0.5;
+  double settle_seconds = 1, rest_seconds = 1;
   std::uint64_t seed = 1;
   bool quick = false, list = false;
   app.add_option("--json", json_path, "Write the rows here");
