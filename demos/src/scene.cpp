@@ -10,6 +10,7 @@
 #include "boxtree/generate.h"
 #include "boxtree/io.h"
 #include "boxtree/query.h"
+#include "hull.h"
 
 namespace demo {
 
@@ -75,6 +76,55 @@ Vec3 centre_bounds(TriangleMesh& mesh) {
 }
 
 }  // namespace
+
+const char* terrain_kind_name(TerrainKind kind) {
+  switch (kind) {
+    case TerrainKind::bowl:
+      return "bowl";
+    case TerrainKind::rough:
+      return "rough";
+    case TerrainKind::flat:
+      return "flat";
+  }
+  return "?";
+}
+
+const char* body_mix_name(BodyMix mix) {
+  switch (mix) {
+    case BodyMix::mixed:
+      return "mixed";
+    case BodyMix::mixed_without_meshes:
+      return "mixed-without-meshes";
+    case BodyMix::sphere:
+      return "sphere";
+    case BodyMix::box:
+      return "box";
+    case BodyMix::capsule:
+      return "capsule";
+    case BodyMix::cylinder:
+      return "cylinder";
+    case BodyMix::hull8:
+      return "hull8";
+    case BodyMix::hull16:
+      return "hull16";
+    case BodyMix::hull32:
+      return "hull32";
+    case BodyMix::hull64:
+      return "hull64";
+    case BodyMix::mesh:
+      return "mesh";
+  }
+  return "?";
+}
+
+bool parse_body_mix(const std::string& name, BodyMix* mix) {
+  for (int m = 0; m <= int(BodyMix::mesh); ++m)
+    if (name == body_mix_name(BodyMix(m))) {
+      *mix = BodyMix(m);
+      return true;
+    }
+  return false;
+}
 
 const char* shape_name(Shape shape) {
   switch (shape) {
@@ -166,19 +216,25 @@ std::shared_ptr<const TriangleMesh> make_demo_terrain(const TerrainOptions& opti
     if (name) *name = options.mesh_path;
   } else {
     if (options.cells < 2 || options.cells > 4096) throw boxtree::Error("--terrain-size must be in [2, 4096]");
-    mesh = boxtree::make_terrain(options.cells, options.cells, seed, kTerrainWidth, kNoiseHeight);
-    // The bowl: flat in the middle, a rim rising towards the square's edges (a rounded square,
-    // so that the corners rise as well).
+    const bool flat = options.kind == TerrainKind::flat;
+    mesh = boxtree::make_terrain(options.cells, options.cells, seed, kTerrainWidth, flat ? 0 : kNoiseHeight);
     const Real half = kTerrainWidth / 2;
     for (Vec3& v : mesh.vertices) {
       v.x() -= half;
       v.y() -= half;
+      if (options.kind != TerrainKind::bowl) continue;
+      // The bowl: flat in the middle, a rim rising towards the square's edges (a rounded square,
+      // so that the corners rise as well).
       const Real u = v.x() / half, w = v.y() / half;
       const Real r = std::min(Real(1), std::pow(u * u * u * u + w * w * w * w, Real(0.25)));
       const Real rim = std::max(Real(0), r - Real(0.55)) / Real(0.45);
       v.z() += 7 * rim * rim;
     }
-    if (name) *name = "fractal terrain " + std::to_string(options.cells) + "x" + std::to_string(options.cells);
+    const std::string size = std::to_string(options.cells) + "x" + std::to_string(options.cells);
+    if (name)
+      *name = options.kind == TerrainKind::bowl    ? "fractal terrain " + size
+              : options.kind == TerrainKind::rough ? "fractal terrain " + size + " without the bowl"
+                                                   : "flat grid " + size;
   }
   return std::make_shared<const TriangleMesh>(std::move(mesh));
 }
@@ -201,9 +257,88 @@ bool TerrainProbe::height_at(Real x, Real y, Real* z) const {
   return true;
 }
 
+namespace {
+
+// The body's shape for a draw `pick` in [0, 1) (the mixes' shares, scene.h).
+Shape shape_of(BodyMix mix, Real pick) {
+  if (mix == BodyMix::mixed_without_meshes) pick *= 0.88;  // the mixed shares below the meshes'
+  switch (mix) {
+    case BodyMix::mixed:
+    case BodyMix::mixed_without_meshes:
+      return pick < 0.2    ? Shape::sphere
+             : pick < 0.4  ? Shape::box
+             : pick < 0.55 ? Shape::capsule
+             : pick < 0.7  ? Shape::cylinder
+             : pick < 0.88 ? Shape::convex
+                           : Shape::mesh;
+    case BodyMix::sphere:
+      return Shape::sphere;
+    case BodyMix::box:
+      return Shape::box;
+    case BodyMix::capsule:
+      return Shape::capsule;
+    case BodyMix::cylinder:
+      return Shape::cylinder;
+    case BodyMix::hull8:
+    case BodyMix::hull16:
+    case BodyMix::hull32:
+    case BodyMix::hull64:
+      return Shape::convex;
+    case BodyMix::mesh:
+      return Shape::mesh;
+  }
+  return Shape::sphere;
+}
+
+// The hull bodies' points: 0 for the mixes' stretched icosahedra.
+int hull_points_of(BodyMix mix) {
+  switch (mix) {
+    case BodyMix::hull8:
+      return 8;
+    case BodyMix::hull16:
+      return 16;
+    case BodyMix::hull32:
+      return 32;
+    case BodyMix::hull64:
+      return 64;
+    default:
+      return 0;
+  }
+}
+
+// `count` points on the unit sphere, spread evenly (a Fibonacci lattice: z in even steps, longitude
+// by the golden angle), jittered and turned at random. Evenly spread, their hull holds the origin
+// well inside (ODE's convexes need it; independent random points can all fall on one side).
+std::vector<Vec3> points_around_sphere(int count, boxtree::Random& random) {
+  const Quat turn(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), random.unit_vector()));
+  const Real golden_angle = kPi * (3 - std::sqrt(Real(5)));
+  std::vector<Vec3> points;
+  for (int k = 0; k < count; ++k) {
+    const Real z = 1 - (2 * k + 1) / Real(count), r = std::sqrt(1 - z * z), phi = golden_angle * k;
+    const Vec3 even(r * std::cos(phi), r * std::sin(phi), z);
+    points.push_back(turn * (even + random.uniform_vec3(-0.15, 0.15)).normalized());
+  }
+  return points;
+}
+
+}  // namespace
+
 Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
+  SceneOptions scene_options;
+  scene_options.terrain = options;
+  scene_options.bodies = count;
+  return make_scene(scene_options, seed);
+}
+
+bool over_terrain(const Scene& scene, const Vec3& point) {
+  return point.x() >= scene.bounds_min.x() && point.x() <= scene.bounds_max.x() && point.y() >= scene.bounds_min.y() &&
+         point.y() <= scene.bounds_max.y();
+}
+
+Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
+  const int count = options.bodies;
   Scene scene;
-  scene.terrain = make_demo_terrain(options, seed, &scene.terrain_name);
+  scene.terrain = make_demo_terrain(options.terrain, seed, &scene.terrain_name);
   scene.bounds_min = scene.bounds_max = scene.terrain->vertices.front();
   for (const Vec3& v : scene.terrain->vertices)
     scene.bounds_min = scene.bounds_min.cwiseMin(v), scene.bounds_max = scene.bounds_max.cwiseMax(v);
@@ -234,13 +369,7 @@ Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
   scene.bodies.reserve(std::size_t(std::max(count, 0)));
   for (int i = 0; i < count; ++i) {
     BodySpec b;
-    const Real pick = random.uniform();
-    b.shape = pick < 0.2    ? Shape::sphere
-              : pick < 0.4  ? Shape::box
-              : pick < 0.55 ? Shape::capsule
-              : pick < 0.7  ? Shape::cylinder
-              : pick < 0.88 ? Shape::convex
-                            : Shape::mesh;
+    b.shape = shape_of(options.mix, random.uniform());
     const Real size = random.uniform(0.25, 0.55);
     TriangleMesh mesh;
     Real volume = 0;
@@ -268,8 +397,13 @@ Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed) {
         b.colour = {0.6, 0.35, 0.85};
         break;
       case Shape::convex: {
-        // A stretched icosahedron: any linear map keeps a convex polyhedron convex.
-        mesh = make_icosahedron(1);
+        // A stretched icosahedron, or the hull of points on a sphere (all are corners): any
+        // linear map keeps a convex polyhedron convex.
+        if (const int points = hull_points_of(options.mix)) {
+          mesh = convex_hull(points_around_sphere(points, random));
+        } else {
+          mesh = make_icosahedron(1);
+        }
         const Vec3 stretch(random.uniform(0.6, 1.2), random.uniform(0.6, 1.2), random.uniform(0.6, 1.2));
         for (Vec3& v : mesh.vertices) v = v.cwiseProduct(stretch) * size;
         b.colour = {0.2, 0.75, 0.7};

@@ -43,10 +43,34 @@ struct Pose {
   Quat orientation = Quat::Identity();
 };
 
+// The generated terrain's shape (all are 40 m across, centred on the origin):
+//   bowl   fractal value noise (4 m high) inside a bowl whose rim keeps the bodies from rolling off;
+//   rough  the same noise without the bowl: bodies that roll off its edge leave the scene;
+//   flat   a flat grid at z = 0, triangulated like the others.
+enum class TerrainKind { bowl, rough, flat };
+const char* terrain_kind_name(TerrainKind kind);
+
 struct TerrainOptions {
-  int cells = 128;        // per side; 2 * cells^2 facets
+  int cells = 128;  // per side; 2 * cells^2 facets
+  TerrainKind kind = TerrainKind::bowl;
   std::string mesh_path;  // instead of the generated terrain
   char up_axis = 'z';     // of the mesh file: 'y' turns y-up into z-up
+};
+
+// Which bodies a scene drops:
+//   mixed                 20% spheres, 20% boxes, 15% capsules, 15% cylinders, 18% convex hulls (stretched
+//                         icosahedra, 12 points), 12% small closed meshes (bumpy spheres and tori);
+//   mixed_without_meshes  the same shares without the meshes;
+//   sphere ... mesh       one kind alone (hull8 ... hull64: hulls of 8 to 64 points on a stretched sphere).
+enum class BodyMix { mixed, mixed_without_meshes, sphere, box, capsule, cylinder, hull8, hull16, hull32, hull64, mesh };
+const char* body_mix_name(BodyMix mix);
+// The mix named by body_mix_name; false for an unknown name.
+bool parse_body_mix(const std::string& name, BodyMix* mix);
+
+struct SceneOptions {
+  TerrainOptions terrain;
+  int bodies = 300;
+  BodyMix mix = BodyMix::mixed;
 };
 
 class TerrainProbe;
@@ -59,15 +83,21 @@ struct Scene {
   std::shared_ptr<const TerrainProbe> probe;                  // heights of the terrain
 };
 
-// The generated terrain: fractal value noise (boxtree::make_terrain) inside a bowl whose rim
-// keeps the bodies from rolling off, 40 m across, centred on the origin; or a mesh file scaled
-// to the same width. Throws boxtree::Error for unreadable meshes.
+// The generated terrain (TerrainKind, from boxtree::make_terrain), or a mesh file scaled to the
+// same width. Throws boxtree::Error for unreadable meshes.
 std::shared_ptr<const TriangleMesh> make_demo_terrain(const TerrainOptions& options, std::uint64_t seed,
                                                       std::string* name = nullptr);
 
-// `count` bodies above the terrain, in layers, with random shapes, sizes, orientations and
-// colours; a deterministic function of the seed.
+// `options.bodies` bodies of the mix above the middle of the terrain (at most 22 m square), in
+// layers, with random shapes, sizes, orientations and colours; a deterministic function of the
+// options and the seed. The defaults (bowl, mixed) give the demo's scene.
+Scene make_scene(const SceneOptions& options, std::uint64_t seed);
+// make_scene with `count` mixed bodies.
 Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed);
+
+// Whether (x, y) of `point` is over the terrain's bounding box: bodies that left it (off the edge
+// of a rough or flat terrain) are no longer in the scene.
+bool over_terrain(const Scene& scene, const Vec3& point);
 
 // Height of the terrain's top surface under (x, y): a ray from above. False if there is none.
 class TerrainProbe {

@@ -44,10 +44,12 @@ class Simulation {
   // ODE builtin: the triangles OPCODE hands to the colliders (dGeomTriMeshSetCallback); boxtree:
   // the candidate facets of every boxtree geom.
   virtual std::uint64_t narrowphase_triangles() const = 0;
-  // Collision time split by the kind of geom pair, for the benchmarks: one entry per pair kind
-  // seen so far ("terrain-box", ..., "body-body"), in a fixed order. ODE: the time of each
-  // dCollide call made by the near callback (the hash space's own work is outside all of them).
-  // Bullet: empty (its dispatcher offers no per-pair hook without replacing it).
+  // Collision time split by the kind of pair, for the benchmarks: one entry per pair kind seen so
+  // far ("terrain-box", ..., "body-body"), in a fixed order. ODE: the time of each dCollide call
+  // made by the near callback (the hash space's own work is outside all of them). Bullet: the time
+  // of the dispatcher's default near callback per broadphase pair (the pair's algorithm: midphase
+  // and narrowphase; the broadphase and the AABB update are outside all of them); contacts are the
+  // points in the pair's manifolds after the call.
   struct PairKindTime {
     std::string kind;
     double seconds = 0;
