@@ -96,8 +96,9 @@ int main(int argc, char** argv) {
         "%s drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds, "
         "%d contacts per call at most\n",
         engine == "bullet" ? "Bullet" : "ODE", cells, bodies, settle, repeats, rounds, max_contacts);
-    std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs", engine == "bullet" ? "Bullet us" : "OPCODE us", "contacts",
-                "triangles", "boxtree us", "contacts", "triangles", "ratio");
+    std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs",
+                engine == "bullet" ? "Bullet us" : "OPCODE us", "contacts", "triangles", "boxtree us", "contacts",
+                "triangles", "ratio");
     double total[2] = {0, 0};
     for (const auto& [kind, both] : rows) {
       const auto per_call = [](const demo::Simulation::PairKindTime& t, double value) {
