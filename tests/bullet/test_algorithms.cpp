@@ -17,6 +17,13 @@
 namespace boxtree::bullet::test {
 namespace {
 
+// Terrain height under (x, y) by a vertical ray against the core tree (brute force would do too).
+Real terrain_height(const AnyTree& tree, Real x, Real y) {
+  Ray ray{Vec3(x, y, 1000), Vec3(0, 0, -1)};
+  const auto hit = tree.ray_closest_hit(ray);
+  return hit ? 1000 - hit->t : -1e30;
+}
+
 std::unique_ptr<btCollisionShape> make_body_shape(int kind, Random& rng) {
   const auto s = [&rng] { return btScalar(rng.uniform(0.3, 0.8)); };
   switch (kind % 5) {

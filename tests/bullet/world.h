@@ -15,7 +15,6 @@
 #include "boxtree/generate.h"
 #include "boxtree/query.h"
 #include "support/random.h"
-#include "support/terrain.h"
 
 namespace boxtree::bullet::test {
 
@@ -94,8 +93,13 @@ struct World {
   }
 };
 
-using boxtree::test::terrain_height;
-using boxtree::test::terrain_height_at;
+// Terrain height under (x, y): the closest hit of a vertical ray on a tree of the terrain;
+// nullopt off the terrain.
+inline std::optional<Real> terrain_height_at(const AnyTree& terrain, Real x, Real y) {
+  const auto hit = terrain.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
+  if (!hit) return std::nullopt;
+  return 1000 - hit->t;
+}
 
 // The points of a body that rest on the ground, in the world: the lowest point of a sphere and of
 // each capsule cap, the corners of a box, 16 points around each rim of a cylinder, the vertices of
@@ -159,9 +163,16 @@ inline std::vector<Vec3> bottom_points(const btCollisionObject& body) {
   return points;
 }
 
-// How deep a body is in the ground (support/terrain.h).
+// How deep a body is in the ground: the largest (terrain height under a bottom point - the
+// point's height) over its bottom_points with terrain under them; negative when it is clear of
+// the ground, nullopt when no point is over the terrain.
 inline std::optional<Real> depth_below(const AnyTree& terrain, const btCollisionObject& body) {
-  return boxtree::test::depth_below(terrain, bottom_points(body));
+  std::optional<Real> depth;
+  for (const Vec3& p : bottom_points(body)) {
+    if (const auto ground = terrain_height_at(terrain, p.x(), p.y()))
+      depth = std::max(depth.value_or(-1e30), *ground - p.z());
+  }
+  return depth;
 }
 
 }  // namespace boxtree::bullet::test

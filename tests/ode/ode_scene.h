@@ -15,7 +15,6 @@
 
 #include "boxtree/generate.h"
 #include "boxtree/ode/boxtree_geom.h"
-#include "support/terrain.h"
 
 namespace boxtree::ode_test {
 
@@ -202,8 +201,18 @@ class DropWorld {
   StepRecord record_;
 };
 
-using test::terrain_height;
-using test::terrain_height_at;
+// Terrain height under (x, y): the closest hit of a vertical ray on the boxtree of the terrain.
+inline Real terrain_height(const AnyTree& tree, Real x, Real y) {
+  const auto hit = tree.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
+  return hit ? 1000 - hit->t : -1e9;
+}
+
+// Terrain height under (x, y), nullopt off the terrain.
+inline std::optional<Real> terrain_height_at(const AnyTree& tree, Real x, Real y) {
+  const auto hit = tree.ray_closest_hit(Ray{Vec3(x, y, 1000), Vec3(0, 0, -1)});
+  if (!hit) return std::nullopt;
+  return 1000 - hit->t;
+}
 
 // The points of a geom that rest on the ground, in the world: the lowest point of a sphere and of
 // each capsule cap, the corners of a box, 16 points around each rim of a cylinder, the vertices
@@ -265,9 +274,16 @@ inline std::vector<Vec3> bottom_points(dGeomID g) {
   return points;
 }
 
-// How deep a geom is in the ground (support/terrain.h).
+// How deep a geom is in the ground: the largest (terrain height under a bottom point - the
+// point's height) over its bottom_points with terrain under them; negative when it is clear of
+// the ground, nullopt when no point is over the terrain.
 inline std::optional<Real> depth_below(const AnyTree& terrain, dGeomID g) {
-  return test::depth_below(terrain, bottom_points(g));
+  std::optional<Real> depth;
+  for (const Vec3& p : bottom_points(g)) {
+    if (const auto ground = terrain_height_at(terrain, p.x(), p.y()))
+      depth = std::max(depth.value_or(-1e30), *ground - p.z());
+  }
+  return depth;
 }
 
 // Four of each kind on a grid over the terrain's interior, 1 unit above the highest ground
