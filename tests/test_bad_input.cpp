@@ -31,7 +31,6 @@ namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 // The paper's six, the general-triangle pie slices and two hybrids.
 const char* const kMethods[] = {"aabb",    "obb-all",         "obb-max",         "obb-min",        "pie-max",

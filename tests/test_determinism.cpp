@@ -32,7 +32,6 @@ namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 // FNV-1a over raw bytes.
 struct Fingerprint {
@@ -63,7 +62,7 @@ std::uint64_t tree_fingerprint(const Tree<V>& tree) {
 template <class V>
 std::uint64_t query_fingerprint(const Tree<V>& tree) {
   Fingerprint f;
-  Random r(3);
+  boxtree::Random r(3);
   const Aabb box = mesh_bounds(tree.mesh());
   for (int i = 0; i < 200; ++i) {
     QueryStats stats;

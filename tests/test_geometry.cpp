@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -36,7 +37,6 @@ namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
@@ -70,7 +70,7 @@ std::array<Vec3, 3> grid_triangle(Random& rng, int lo, int hi, int denominator, 
         t[2] = t[0] + Real(0.5) * (t[1] - t[0]);
         break;  // collinear, c between
     }
-    rng.shuffle(t.begin(), t.end());
+    std::shuffle(t.begin(), t.end(), rng.engine);
   }
   return t;
 }
@@ -102,7 +102,7 @@ RMat identity_rmat() {
 // every axis parallel to some axis of the other frame.
 RMat signed_permutation(Random& rng) {
   std::array<int, 3> perm = {0, 1, 2};
-  rng.shuffle(perm.begin(), perm.end());
+  std::shuffle(perm.begin(), perm.end(), rng.engine);
   RMat m;
   for (int i = 0; i < 3; ++i) m[i][perm[i]] = rng.chance(0.5) ? 1 : -1;
   return m;

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,6 @@
 #include "boxtree/mesh.h"
 #include "support/files.h"
 #include "support/meshes.h"
-#include "support/random.h"
 
 namespace fs = std::filesystem;
 using boxtree::TriangleMesh;
@@ -218,7 +218,7 @@ TEST(MeshIoOff, QuadIsFannedInOrder) {
 }
 
 TEST(MeshIoObj, SaveThenLoadIsBitExact) {
-  boxtree::test::Random rng(12345);
+  std::mt19937_64 rng(12345);
   TriangleMesh mesh;
   // Random bit patterns cover every exponent (subnormals included), plus hand-picked edge values.
   const double specials[] = {0.0,
@@ -236,7 +236,7 @@ TEST(MeshIoObj, SaveThenLoadIsBitExact) {
     Vec3 p;
     for (int i = 0; i < 3; ++i) {
       do {
-        const std::uint64_t bits = rng.next();
+        const std::uint64_t bits = rng();
         std::memcpy(&p[i], &bits, 8);
       } while (!std::isfinite(p[i]));
     }
@@ -281,9 +281,9 @@ TEST(MeshIoError, EmptyFile) {
 }
 
 std::string garbage(std::size_t size, std::uint64_t seed) {
-  boxtree::test::Random rng(seed);
+  std::mt19937_64 rng(seed);
   std::string bytes(size, '\0');
-  for (char& c : bytes) c = static_cast<char>(rng.next() & 0xff);
+  for (char& c : bytes) c = static_cast<char>(rng() & 0xff);
   return bytes;
 }
 

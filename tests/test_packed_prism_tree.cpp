@@ -18,7 +18,6 @@ namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 // Query counts times BOXTREE_TEST_SCALE.
 int scaled(int n) { return std::max(1, int(n * test_scale())); }

@@ -27,7 +27,6 @@ namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 TEST(QueryRay, MatchesBruteForceOnProceduralMeshes) {
   for (const auto& [name, mesh] : test::procedural_meshes()) check_rays(build_tree<Aabb>(mesh), 300, 1, name);

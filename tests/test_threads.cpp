@@ -21,13 +21,12 @@
 #include "support/checks.h"
 #include "support/files.h"
 #include "support/meshes.h"
-#include "support/random.h"
+#include "support/random.h"  // after checks.h: its Random is boxtree::Random
 
 namespace boxtree {
 namespace {
 
 using namespace test;
-using test::Random;  // not boxtree::Random: the tests' conveniences
 
 constexpr int kThreads = 8;
 
@@ -62,7 +61,7 @@ struct Inputs {
 Inputs make_inputs(const TriangleMesh& mesh, int count) {
   const Aabb box = mesh_bounds(mesh);
   const Real size = box.extent().norm();
-  Random r(77);
+  boxtree::Random r(77);
   Inputs in;
   for (int i = 0; i < count; ++i) {
     const Vec3 c = random_point_near(r, box);

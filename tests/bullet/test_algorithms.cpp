@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <random>
 
 #include "boxtree/collide.h"
 #include "boxtree/geometry.h"
@@ -24,22 +25,21 @@ Real terrain_height(const AnyTree& tree, Real x, Real y) {
   return hit ? 1000 - hit->t : -1e30;
 }
 
-std::unique_ptr<btCollisionShape> make_body_shape(int kind, Random& rng) {
-  const auto s = [&rng] { return btScalar(rng.uniform(0.3, 0.8)); };
+std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
+  std::uniform_real_distribution<float> s(0.3f, 0.8f);
   switch (kind % 5) {
     case 0:
-      return std::make_unique<btSphereShape>(s());
+      return std::make_unique<btSphereShape>(s(rng));
     case 1:
-      return std::make_unique<btBoxShape>(to_bt(rng.point(0.3, 0.8)));
-    case 2: {
-      const btScalar radius = s() * 0.7f;
-      return std::make_unique<btCapsuleShapeZ>(radius, s() * 1.5f);
-    }
+      return std::make_unique<btBoxShape>(btVector3(s(rng), s(rng), s(rng)));
+    case 2:
+      return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, s(rng) * 1.5f);
     case 3:
-      return std::make_unique<btCylinderShapeZ>(to_bt(rng.point(0.3, 0.8)));
+      return std::make_unique<btCylinderShapeZ>(btVector3(s(rng), s(rng), s(rng)));
     default: {
       auto hull = std::make_unique<btConvexHullShape>();
-      for (int i = 0; i < 12; ++i) hull->addPoint(to_bt(rng.point(-0.6, 0.6)), false);
+      std::uniform_real_distribution<float> p(-0.6f, 0.6f);
+      for (int i = 0; i < 12; ++i) hull->addPoint(btVector3(p(rng), p(rng), p(rng)), false);
       hull->recalcLocalAabb();
       // Faces: Bullet's hull-hull pairs use its clipping; boxtree keeps GJK for hulls unless
       // AlgorithmSettings::hullFaces (the test below).
@@ -66,11 +66,11 @@ struct DropScene {
     } else {
       world.add(std::make_unique<btBvhTriangleMeshShape>(mesh.array.get(), true), 0, btVector3(0, 0, 0));
     }
-    Random rng(17);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> xy(8, 42), angle(0, 3.14f);
     for (int i = 0; i < count; ++i) {
-      const Real x = rng.uniform(8, 42), y = rng.uniform(8, 42);
-      const btVector3 p(btScalar(x), btScalar(y), 14 + float(i % 7) * 1.6f);
-      const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(rng.uniform(0, 3.14)));
+      const btVector3 p(xy(rng), xy(rng), 14 + float(i % 7) * 1.6f);
+      const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), angle(rng));
       btRigidBody* body = world.add(make_body_shape(i, rng), 1, p, q);
       // Some rolling resistance, so that spheres and cylinders settle in the hollows instead of
       // rolling for ever: the comparison is about resting contact.
@@ -102,18 +102,14 @@ struct DropScene {
 // on the analytic one (cylinders took GJK there then; since issue 24 they take the core's analytic
 // cylinder routine: gcc, deepest moving body 0.03 cm above), so a moving body is only required to
 // have its centre above the terrain. Contact points at rest: within 3.6% of Bullet's
-// own count with gcc, 6.0% with clang -> 7%. Those figures are from the scene's earlier
-// std::mt19937 draws; with the tests' splitmix64 generator (support/random.h), gcc: at rest 2.0 cm
-// (Bullet's own), 0.23 (boxtree analytic), 2.2 (GJK); 8 of 40 still moving with Bullet's own shape
-// (4 and 6 with boxtree) -> 9; contact points within 1.7%. Clang not remeasured. Since the
-// collider keeps an engine's contacts to the request's margin (Bullet's GJK reported up to twice
-// the breaking distance, contacts the manifold then threw away), the all-GJK world rests with
-// 134.4 points against Bullet's 145.2 (0.926) on this scene, and 138.0 against 140.0 with the
-// scene's seed 20 (before: 145.8 and 140.3): the trajectories differ, and which bodies rest on an
-// edge with fewer points with them (at identical poses, BulletTraps.HullsGetTheManifoldPointsOf-
-// BulletsOwnShape) -> 10%.
+// own count with gcc, 6.0% with clang -> 7%. Since the collider keeps an engine's contacts to
+// the request's margin (Bullet's GJK reported up to twice the breaking distance, contacts the
+// manifold then threw away), the all-GJK world's points at rest moved by up to 7.5% of Bullet's
+// on this scene's other draws (0.926 and 0.986 on two trajectories, from 1.004 and 1.002): which
+// bodies rest on an edge with fewer points changes with the trajectory (at identical poses:
+// BulletTraps.HullsGetTheManifoldPointsOfBulletsOwnShape) -> 10%.
 constexpr Real kDropDepthAllowance = 0.03;
-constexpr int kDropMovingAllowance = 9;
+constexpr int kDropMovingAllowance = 7;
 constexpr double kDropContactRatioAllowance = 0.10;
 
 TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
@@ -178,20 +174,20 @@ TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
 // separating axes' least lift that clears the triangle where the hull overhangs its edge.
 TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
   const TriangleMesh terrain = make_terrain(24, 24, 5, 12, 1.5);
-  Random rng(23);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> p(-0.5f, 0.5f), xy(3, 9), angle(0, 6.28f), unit(-1, 1);
   int compared = 0, more_points = 0;
   for (int trial = 0; trial < 60; ++trial) {
-    auto make_hull = [&](Random r) {
+    auto make_hull = [&](std::mt19937 r) {
       auto hull = std::make_unique<btConvexHullShape>();
-      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(to_bt(r.point(-0.5, 0.5)) * 0.8f, false);
+      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(btVector3(p(r), p(r), p(r)) * 0.8f, false);
       hull->recalcLocalAabb();
       hull->initializePolyhedralFeatures();
       return hull;
     };
-    const Random shape_seed(rng.next());
-    const btVector3 at = to_bt(rng.point(Vec3(3, 3, 0), Vec3(9, 9, 0)));
-    const btVector3 axis = to_bt(rng.point(-1, 1) + Vec3(0, 0, 0.01));
-    const btQuaternion turn(axis.normalized(), btScalar(rng.uniform(0, 6.28)));
+    const std::mt19937 shape_seed(rng());
+    const btVector3 at(xy(rng), xy(rng), 0);
+    const btQuaternion turn(btVector3(unit(rng), unit(rng), unit(rng) + 0.01f).normalized(), angle(rng));
     const btScalar sink = btScalar(0.02 + 0.08 * (trial % 5) / 4.0);  // 2 to 10 cm into the ground
     float deepest[2] = {0, 0};
     int points[2] = {0, 0};

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -44,16 +45,16 @@ TEST(BulletMeshShape, ProcessAllTrianglesIsExactAndWithinBulletsSet) {
   const BulletMesh bm(test_terrain());
   const TriangleMesh reference = bm.as_boxtree();
   btBvhTriangleMeshShape bullet(bm.array.get(), true);
-  Random rng(3);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> pos(-5, 55), zpos(-2, 12), size(0, 6);
   for (const std::string& method : kMethods) {
     SCOPED_TRACE(method);
     const BoxtreeMeshShape shape(*bm.array, method);
     const bool by_box = method == "aabb";
     std::size_t ours_total = 0, bullet_total = 0;
     for (int q = 0; q < 300; ++q) {
-      const btVector3 c = to_bt(rng.point(Vec3(-5, -5, -2), Vec3(55, 55, 12)));
-      btVector3 h = to_bt(rng.point(0, 6));
-      if (q % 10 == 0) h.setZ(0);
+      const btVector3 c(btScalar(pos(rng)), btScalar(pos(rng)), btScalar(zpos(rng)));
+      const btVector3 h(btScalar(size(rng)), btScalar(size(rng)), btScalar(q % 10 == 0 ? 0 : size(rng)));
       const btVector3 lo = c - h, hi = c + h;
       const Aabb box{to_vec3(lo), to_vec3(hi)};
       FacetSet expected;
@@ -140,10 +141,11 @@ TEST(BulletMeshShape, LocalScalingIncludingNegativeMatchesBruteForce) {
     }
     EXPECT_LT((to_vec3(lo) - expected_lo).norm(), 1e-4);  // negative scale: the ends swap
     EXPECT_LT((to_vec3(hi) - expected_hi).norm(), 1e-4);
-    Random rng(9);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> u(0, 1);
     for (int q = 0; q < 100; ++q) {
-      const btVector3 c = to_bt(rng.point(Vec3(0, 0, -12), Vec3(100, 25, 0)));
-      const btVector3 h = to_bt(rng.point(Vec3::Zero(), Vec3(8, 8, 4)));
+      const btVector3 c(btScalar(u(rng) * 100), btScalar(u(rng) * 25), btScalar(-u(rng) * 12));
+      const btVector3 h(btScalar(u(rng) * 8), btScalar(u(rng) * 8), btScalar(u(rng) * 4));
       CollectTriangles cb;
       shape.processAllTriangles(&cb, c - h, c + h);
       const Aabb box{to_vec3(c - h), to_vec3(c + h)};
@@ -356,10 +358,11 @@ TEST(BulletMeshShape, ShapesShareOneBuiltTree) {
   EXPECT_NE(&a.collisionMesh(), &from_mesh.collisionMesh());
   std::printf("collision mesh of %zu facets: %zu bytes, held once by both shapes\n", terrain->facet_count(),
               a.collisionMesh().memory_bytes());
-  Random rng(4);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> pos(0, 50), size(0.5, 5);
   for (int q = 0; q < 50; ++q) {
-    const btVector3 c = to_bt(rng.point(Vec3::Zero(), Vec3(50, 50, 5)));
-    const btVector3 h = to_bt(rng.point(0.5, 5));
+    const btVector3 c(btScalar(pos(rng)), btScalar(pos(rng)), btScalar(pos(rng) / 10));
+    const btVector3 h(btScalar(size(rng)), btScalar(size(rng)), btScalar(size(rng)));
     EXPECT_EQ(collect(a, c - h, c + h), collect(from_mesh, c - h, c + h)) << "query " << q;
   }
   // Two static instances of the tree side by side, a sphere dropped on each: both land on their
@@ -412,14 +415,15 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
   for (const std::string& method : {std::string("aabb"), std::string("obb-min"), std::string("pie-min+aabb@3")}) {
     SCOPED_TRACE(method);
     TwoWorlds w(test_terrain(), method, pose);
-    Random rng(11);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-10, 60);
     int hits = 0, ties = 0;
     w.shape->resetCounters();
     const int rays = 1500;
     std::uint64_t triangles_seen = 0;
     for (int i = 0; i < rays; ++i) {
-      const btVector3 from = pose(to_bt(rng.point(Vec3(-10, -10, 5), Vec3(60, 60, 40))));
-      const btVector3 to = pose(to_bt(rng.point(Vec3(-10, -10, -20), Vec3(60, 60, -2.5))));
+      const btVector3 from = pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(u(rng) / 2 + 10)));
+      const btVector3 to = pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(-u(rng) / 4 - 5)));
       ClosestWithTriangle a(from, to), b(from, to);
       w.bullet.world.rayTest(from, to, a);
       const auto before = w.shape->counters().triangles;
@@ -463,15 +467,16 @@ TEST(BulletMeshShape, ConvexSweepTestMatchesBullet) {
   btSphereShape sphere(btScalar(0.7));
   btBoxShape box(btVector3(btScalar(0.5), btScalar(1.0), btScalar(0.3)));
   btCapsuleShapeZ capsule(btScalar(0.4), btScalar(1.2));
-  Random rng(5);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-5, 55);
   int hits = 0;
   for (int i = 0; i < 300; ++i) {
     const btConvexShape* cast = i % 3 == 0   ? static_cast<btConvexShape*>(&sphere)
                                 : i % 3 == 1 ? static_cast<btConvexShape*>(&box)
                                              : &capsule;
-    const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(rng.uniform(-0.5, 5.5)));
-    const btTransform from(r0, pose(to_bt(rng.point(Vec3(-5, -5, 14), Vec3(55, 55, 26)))));
-    const btTransform to(r0, pose(to_bt(rng.point(Vec3(-5, -5, -8), Vec3(55, 55, -8)))));
+    const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(u(rng) / 10));
+    const btTransform from(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(15 + u(rng) / 5))));
+    const btTransform to(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(-8))));
     btCollisionWorld::ClosestConvexResultCallback a(from.getOrigin(), to.getOrigin()),
         b(from.getOrigin(), to.getOrigin());
     w.bullet.world.convexSweepTest(cast, from, to, a);

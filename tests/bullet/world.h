@@ -14,14 +14,10 @@
 #include "boxtree/bullet/mesh_shape.h"
 #include "boxtree/generate.h"
 #include "boxtree/query.h"
-#include "support/random.h"
 
 namespace boxtree::bullet::test {
 
-using Random = boxtree::test::Random;  // the tests' one generator (support/random.h)
-
 inline Vec3 to_vec3(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
-inline btVector3 to_bt(const Vec3& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
 // Bullet's rotation, re-orthonormalized (single precision is orthonormal to ~1e-7 only).
 inline Mat3 to_mat_test(const btMatrix3x3& m) {
   Mat3 r;

@@ -13,7 +13,6 @@
 #include "boxtree/volume/hybrid.h"
 #include "support/brute_force.h"
 #include "support/meshes.h"
-#include "support/random.h"
 
 namespace boxtree::test {
 

@@ -1,22 +1,13 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // Random inputs for the randomized cross-checks (a fixed seed per test: failures reproduce).
-//
-// The one generator of the tests and benchmarks is generate.h's splitmix64 `boxtree::Random`
-// (the one the procedural meshes use). Everything below maps its 64-bit words to numbers with
-// our own arithmetic, never with <random>'s distributions or std::shuffle, whose algorithms the
-// standard leaves to each library: a seed gives the same inputs with libstdc++, libc++ and MSVC,
-// so a failure seen on one platform reproduces on every other.
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <iterator>
-#include <utility>
+#include <random>
 
 #include <Eigen/Geometry>
 
-#include "boxtree/generate.h"
 #include "boxtree/shapes.h"
 
 namespace boxtree::test {
@@ -30,20 +21,12 @@ inline int scaled(int n) {
   return std::max(1, static_cast<int>(n * scale));
 }
 
-// boxtree::Random (next, uniform, uniform_vec3, unit_vector) plus the tests' conveniences.
-struct Random : boxtree::Random {
-  using boxtree::Random::Random;
-  // Uniform in [lo, hi] (lo <= hi; the modulo bias is below 2^-32 for the ranges tests use).
-  int integer(int lo, int hi) {
-    const std::uint64_t range = std::uint64_t(std::int64_t(hi) - lo) + 1;
-    return static_cast<int>(lo + static_cast<std::int64_t>(next() % range));
-  }
-  bool chance(Real p) { return uniform() < p; }
-  // Standard normal (Box-Muller).
-  Real normal() {
-    const Real u = 1 - uniform();  // in (0, 1]
-    return std::sqrt(-2 * std::log(u)) * std::cos(6.283185307179586 * uniform());
-  }
+struct Random {
+  std::mt19937_64 engine;
+  explicit Random(std::uint64_t seed) : engine(seed) {}
+  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine); }
+  Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine); }
+  bool chance(Real p) { return uniform(0, 1) < p; }
   Real grid(int lo, int hi, int denominator = 1) {
     return Real(integer(lo * denominator, hi * denominator)) / denominator;
   }
@@ -53,30 +36,25 @@ struct Random : boxtree::Random {
     const Real z = grid(lo, hi, denominator);
     return {x, y, z};
   }
-  Vec3 point(Real lo, Real hi) { return uniform_vec3(lo, hi); }
-  // Uniform in the box [lo, hi] (x, then y, then z: the draws are ordered).
-  Vec3 point(const Vec3& lo, const Vec3& hi) {
-    const Real x = uniform(lo.x(), hi.x());
-    const Real y = uniform(lo.y(), hi.y());
-    const Real z = uniform(lo.z(), hi.z());
+  Vec3 point(Real lo, Real hi) {
+    const Real x = uniform(lo, hi);
+    const Real y = uniform(lo, hi);
+    const Real z = uniform(lo, hi);
     return {x, y, z};
   }
+  Vec3 unit_vector() {
+    for (;;) {
+      const Vec3 v = point(-1, 1);
+      const Real n = v.norm();
+      if (n > 0.1 && n <= 1) return v / n;
+    }
+  }
   Mat3 rotation() {
-    const Real w = uniform(-1, 1), x = uniform(-1, 1), y = uniform(-1, 1), z = uniform(-1, 1);
-    Eigen::Quaterniond q(w, x, y, z);
+    Eigen::Quaterniond q(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
     if (q.norm() < 0.1) q = Eigen::Quaterniond(1, 0.2, 0.3, 0.4);
     return q.normalized().toRotationMatrix();
   }
-  RigidTransform motion(Real reach) {
-    const Mat3 r = rotation();
-    return {r, point(-reach, reach)};
-  }
-  // Fisher-Yates.
-  template <class It>
-  void shuffle(It first, It last) {
-    const auto n = std::distance(first, last);
-    for (auto i = n - 1; i > 0; --i) std::iter_swap(first + i, first + integer(0, static_cast<int>(i)));
-  }
+  RigidTransform motion(Real reach) { return {rotation(), point(-reach, reach)}; }
 };
 
 }  // namespace boxtree::test
