@@ -85,8 +85,7 @@ Measure run(const demo::Scene& scene, const std::string& engine, bool boxtree, c
   options.boxtree_midphase = boxtree;
   options.method = method;
   const auto build_start = Clock::now();
-  std::unique_ptr<demo::Simulation> sim =
-      engine == "bullet" ? demo::make_bullet_simulation(scene, options) : demo::make_ode_simulation(scene, options);
+  std::unique_ptr<demo::Simulation> sim = demo::make_simulation(engine, scene, options);
   Measure m;
   m.build_seconds = std::chrono::duration<double>(Clock::now() - build_start).count();
   const int first_measured = steps / 3;

@@ -64,12 +64,11 @@ int main(int argc, char** argv) {
     demo::SimOptions boxtree_options = builtin_options;
     boxtree_options.boxtree_midphase = true;
     boxtree_options.method = method;
-    const auto make_simulation = engine == "bullet" ? demo::make_bullet_simulation : demo::make_ode_simulation;
     std::vector<demo::Pose> poses;
     {
       // Settled by the built-in world, so that the poses do not depend on the boxtree code under
       // test (A/B runs of two versions replay the very same pairs).
-      auto settling = make_simulation(scene, demo::SimOptions{});
+      auto settling = demo::make_simulation(engine, scene, demo::SimOptions{});
       for (int i = 0; i < settle; ++i) settling->step(1.0 / 60);
       poses = settling->poses();
     }
@@ -80,7 +79,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<demo::Simulation> worlds[2];
     for (const bool use_boxtree : {false, true}) {
       if (midphase != "both" && use_boxtree != (midphase == "boxtree")) continue;
-      worlds[use_boxtree] = make_simulation(scene, use_boxtree ? boxtree_options : builtin_options);
+      worlds[use_boxtree] = demo::make_simulation(engine, scene, use_boxtree ? boxtree_options : builtin_options);
       if (!worlds[use_boxtree]->set_poses(poses)) throw boxtree::Error("the simulation cannot be posed");
     }
     for (int round = 0; round < rounds; ++round) {

@@ -129,8 +129,7 @@ Run run(const demo::Scene& scene, const std::string& engine, bool boxtree, const
   options.boxtree_midphase = boxtree;
   options.method = kMethod;
   const auto start = Clock::now();
-  std::unique_ptr<demo::Simulation> sim =
-      engine == "bullet" ? demo::make_bullet_simulation(scene, options) : demo::make_ode_simulation(scene, options);
+  std::unique_ptr<demo::Simulation> sim = demo::make_simulation(engine, scene, options);
   Run r;
   r.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   struct Snapshot {

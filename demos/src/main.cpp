@@ -122,7 +122,7 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
   sim_options.method = o.method;
   sim_options.seed = o.seed;
   sim_options.mesh_contacts = o.mesh_contacts;
-  auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
+  auto sim = make_simulation(o.engine, scene, sim_options);
   constexpr Real kAllowance = 0.05;  // as in the simulation summary
   const TerrainProbe& probe = *scene.probe;
   json samples = json::array();
@@ -215,7 +215,7 @@ int run_simulation(const Options& o, const TerrainOptions& terrain_options) {
   sim_options.method = o.method;
   sim_options.seed = o.seed;
   sim_options.mesh_contacts = o.mesh_contacts;
-  auto sim = bullet ? make_bullet_simulation(scene, sim_options) : make_ode_simulation(scene, sim_options);
+  auto sim = make_simulation(o.engine, scene, sim_options);
   const double setup_seconds = seconds_since(start);
 
   Renderer renderer(o.width, o.height);

@@ -78,6 +78,8 @@ class Simulation {
 // Throw boxtree::Error when the boxtree midphase is asked for but the adapter was not built.
 std::unique_ptr<Simulation> make_bullet_simulation(const Scene& scene, const SimOptions& options);
 std::unique_ptr<Simulation> make_ode_simulation(const Scene& scene, const SimOptions& options);
+// The engine by name: "bullet" or "ode" (boxtree::Error otherwise, and as above).
+std::unique_ptr<Simulation> make_simulation(const std::string& engine, const Scene& scene, const SimOptions& options);
 
 bool have_bullet_adapter();
 bool have_ode_adapter();
