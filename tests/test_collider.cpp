@@ -241,6 +241,53 @@ TEST(Collider, EngineNarrowphaseOnOneSidedFacetsPushesOutThroughTheFront) {
   EXPECT_GT(turned, 0u);  // the engine did push some out through a back
 }
 
+// An engine narrowphase that reports farther than the request's margin (Bullet's GJK adds its
+// manifold's breaking distance to the reach it is given): those contacts do not come back, and
+// they take no place of a nearer one in the reduction. The same box through the engine path with
+// and without such far contacts added gives the same contacts.
+TEST(Collider, EngineContactsBeyondTheMarginDoNotComeBack) {
+  Random random(11);
+  const auto mesh = CollisionMesh::build(std::make_shared<TriangleMesh>(make_terrain(12, 12, 2, 12, 2)), Method{});
+  std::size_t contacts = 0;
+  for (int trial = 0; trial < test::scaled(200); ++trial) {
+    const Obb box{near_surface(mesh->mesh(), random, 0.3), random.rotation(), Vec3(0.5, 0.4, 0.3)};
+    auto support = [&](const Vec3& d) {
+      Vec3 p = box.center;
+      for (int k = 0; k < 3; ++k) p += box.axes.col(k) * (d.dot(box.axes.col(k)) >= 0 ? 1 : -1) * box.half_extents[k];
+      return p;
+    };
+    ContactRequest request;
+    request.margin = 0.05;
+    request.two_sided = random.chance(0.5);
+    request.max_contacts = 4;
+    const auto engine = [&](bool far) {
+      return [&box, far](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+        int n = contact_box_triangle(box, a, b, c, o, out);
+        if (far && n < kMaxEngineTriangleContacts) {
+          // Beyond the margin, at the triangle's far corner (a wide spread the reduction would like).
+          ContactPoint extra = n > 0 ? out[0] : ContactPoint{};
+          extra.position = c;
+          extra.depth = -o.margin - 0.01;
+          if (n == 0) extra.normal = (b - a).cross(c - a).normalized();
+          out[n++] = extra;
+        }
+        return n;
+      };
+    };
+    ContactResult with_far, without;
+    collide_convex(*mesh, SupportShape{support, box.center, box, true}, engine(true), request, with_far);
+    collide_convex(*mesh, SupportShape{support, box.center, box, true}, engine(false), request, without);
+    ASSERT_EQ(with_far.contacts.size(), without.contacts.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < without.contacts.size(); ++i) {
+      EXPECT_EQ(with_far.contacts[i].position, without.contacts[i].position);
+      EXPECT_EQ(with_far.contacts[i].depth, without.contacts[i].depth);
+      EXPECT_GE(with_far.contacts[i].depth, -request.margin);
+    }
+    contacts += without.contacts.size();
+  }
+  EXPECT_GT(contacts, 100u);
+}
+
 // The reduction keeps the deepest contact and says what went; early_stop stops at the count.
 TEST(Collider, ReductionKeepsTheDeepestAndCountsWhatWent) {
   const auto mesh = CollisionMesh::build(std::make_shared<TriangleMesh>(make_terrain(8, 8, 1, 8, 0)), Method{});

@@ -101,6 +101,17 @@ Obb placed_box(const std::vector<Vec3>& local, const RigidTransform& mesh_from_l
 
 bool finite(const RigidTransform& t) { return t.rotation.allFinite() && t.translation.allFinite(); }
 
+// An engine narrowphase's contacts, kept to the request's reach (depth >= -margin), as the
+// analytic routines keep theirs: an engine may report farther (Bullet's GJK adds its manifold's
+// breaking distance to the one it is given), and such contacts would take the places of nearer
+// ones in the reduction, only to be thrown away by the engine afterwards.
+int within_margin(ContactPoint* out, int n, Real margin) {
+  int kept = 0;
+  for (int i = 0; i < n; ++i)
+    if (out[i].depth >= -margin) out[kept++] = out[i];
+  return kept;
+}
+
 // Step 3 for an engine narrowphase: a contact whose normal points behind a one-sided facet is
 // turned to the facet's front, at the depth the shape's deepest point along the front normal
 // lies behind the facet's plane; a shape wholly in front gives none.
@@ -299,7 +310,8 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
       mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
-        const int n = std::min(narrowphase(a, b, c, engine_options, out), kMaxEngineTriangleContacts);
+        const int n = within_margin(out, std::min(narrowphase(a, b, c, engine_options, out), kMaxEngineTriangleContacts),
+                                    o.margin);
         return o.two_sided ? n : apply_front(shape, a, b, c, out, n);
       });
   reduce(request, result);

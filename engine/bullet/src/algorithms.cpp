@@ -211,7 +211,12 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     const Obb bounds{to_vec(convex_in_mesh((lo + hi) * btScalar(0.5))), basis, to_vec((hi - lo) * btScalar(0.5))};
     CatchingResult catcher(convex_wrap, mesh_wrap);
     catcher.setPersistentManifold(m_manifold);
-    catcher.m_closestPointDistanceThreshold = btScalar(request.margin - mesh_margin);
+    // The caller's own threshold, as btConvexConcaveCollisionAlgorithm passes it on (the request's
+    // margin less the mesh's margin and the breaking distance): Bullet's convex-convex algorithm
+    // adds the manifold's breaking distance itself. (Passing the whole margin made GJK report up
+    // to twice the breaking distance; the collider now drops such contacts either way.)
+    catcher.m_closestPointDistanceThreshold =
+        btScalar(request.margin - mesh_margin) - m_manifold->getContactBreakingThreshold();
     catcher.mesh_to_world = mesh_wrap->getWorldTransform();
     catcher.mesh_margin = mesh_margin;
     auto narrowphase = [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions&, ContactPoint* out) {
