@@ -310,8 +310,8 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
       mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
-        const int n = within_margin(out, std::min(narrowphase(a, b, c, engine_options, out), kMaxEngineTriangleContacts),
-                                    o.margin);
+        const int n = within_margin(
+            out, std::min(narrowphase(a, b, c, engine_options, out), kMaxEngineTriangleContacts), o.margin);
         return o.two_sided ? n : apply_front(shape, a, b, c, out, n);
       });
   reduce(request, result);
