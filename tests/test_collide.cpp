@@ -14,7 +14,12 @@ namespace boxtree {
 namespace {
 
 RigidTransform random_motion(Random& r, double translation) {
-  Eigen::Quaterniond q(r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1));
+  // z, y, x, then w: gcc's order for the former Quaterniond(w, x, y, z) of four draws (see tests/support/random.h).
+  const Real z = r.uniform(-1, 1);
+  const Real y = r.uniform(-1, 1);
+  const Real x = r.uniform(-1, 1);
+  const Real w = r.uniform(-1, 1);
+  Eigen::Quaterniond q(w, x, y, z);
   q.normalize();
   RigidTransform t;
   t.rotation = q.toRotationMatrix();

@@ -61,7 +61,8 @@ struct Random : test::Random {
       u = 1 - u;
       v = 1 - v;
     }
-    return t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]) + uniform(0, spread) * unit_vector();
+    const Vec3 direction = unit_vector();  // before the distance: see tests/support/random.h
+    return t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]) + uniform(0, spread) * direction;
   }
 };
 
@@ -410,8 +411,10 @@ TEST(ContactConvex, HullOfACubeAgreesWithTheBoxRoutine) {
   int not_least = 0;
   for (int trial = 0; trial < scaled(300); ++trial) {
     const std::array<Vec3, 3> t = {rng.point(-2, 2), rng.point(-2, 2), rng.point(-2, 2)};
-    const Obb box = make_box(rng.near(t, 0.8), rng.rotation(),
-                             Vec3(rng.uniform(0.2, 0.6), rng.uniform(0.2, 0.6), rng.uniform(0.2, 0.6)));
+    // The last argument first, the half extents z first: see tests/support/random.h.
+    const Vec3 half = test::vec3_z_first([&] { return rng.uniform(0.2, 0.6); });
+    const Mat3 axes = rng.rotation();
+    const Obb box = make_box(rng.near(t, 0.8), axes, half);
     std::vector<Vec3> corners;
     for (int i = 0; i < 8; ++i) {
       Vec3 s;
@@ -796,7 +799,8 @@ TEST(ContactRandom, CapsuleAgainstExactOverlap) {
   for (int trial = 0; trial < scaled(10000); ++trial) {
     const auto t = rng.triangle();
     const Vec3 mid = rng.near(t, 1.0);
-    Vec3 half = rng.uniform(0, 0.8) * rng.unit_vector();
+    const Vec3 direction = rng.unit_vector();  // first: see tests/support/random.h
+    Vec3 half = rng.uniform(0, 0.8) * direction;
     if (trial % 5 == 0 && (t[1] - t[0]).cross(t[2] - t[0]).norm() > 1e-3) {
       // Nearly parallel to the face: exercises the two-point case.
       const Vec3 n = front_normal(t);
@@ -827,8 +831,10 @@ TEST(ContactRandom, BoxAgainstExactOverlap) {
   int multi = 0;
   for (int trial = 0; trial < scaled(10000); ++trial) {
     const auto t = rng.triangle();
-    const Obb box = make_box(rng.near(t, 1.0), rng.rotation(),
-                             Vec3(rng.uniform(0.02, 0.7), rng.uniform(0.02, 0.7), rng.uniform(0.02, 0.7)));
+    // The last argument first, the half extents z first: see tests/support/random.h.
+    const Vec3 half = test::vec3_z_first([&] { return rng.uniform(0.02, 0.7); });
+    const Mat3 axes = rng.rotation();
+    const Obb box = make_box(rng.near(t, 1.0), axes, half);
     const ContactOptions options = random_options(rng, trial);
     ContactPoint c[kMaxBoxTriangleContacts];
     const int n = contact_box_triangle(box, t[0], t[1], t[2], options, c);
@@ -914,7 +920,8 @@ TEST(ContactRandom, ConvexCapsuleAgainstExactOverlap) {
   for (int trial = 0; trial < scaled(1000); ++trial) {
     const auto t = rng.triangle();
     const Vec3 mid = rng.near(t, 1.0);
-    const Vec3 half = rng.uniform(0, 0.6) * rng.unit_vector();
+    const Vec3 direction = rng.unit_vector();  // first: see tests/support/random.h
+    const Vec3 half = rng.uniform(0, 0.6) * direction;
     const Capsule cap{mid - half, mid + half, rng.uniform(0.1, 0.5)};
     const auto support = [&](const Vec3& d) {
       const Real len = d.norm();
@@ -982,7 +989,8 @@ TEST(ContactRandom, CylinderAgreesWithTheGeneralRoutine) {
   for (int trial = 0; trial < scaled(1000); ++trial) {
     const auto t = rng.triangle();
     const Vec3 mid = rng.near(t, 0.8);
-    const Vec3 half = rng.uniform(0.05, 0.6) * rng.unit_vector();
+    const Vec3 direction = rng.unit_vector();  // first: see tests/support/random.h
+    const Vec3 half = rng.uniform(0.05, 0.6) * direction;
     const Vec3 p0 = mid - half;
     const Vec3 p1 = mid + half;
     const Real radius = rng.uniform(0.1, 0.5);
@@ -1049,9 +1057,11 @@ TEST(ContactCylinder, PushOutFromBehindIsTheDeepestPointOverTheTriangle) {
     const std::array<Vec3, 3> t = {rng.point(-1, 1), rng.point(-1, 1), rng.point(-1, 1)};
     const Vec3 n = front_normal(t);
     if (!((t[1] - t[0]).cross(t[2] - t[0]).norm() > 1e-2)) continue;
-    const Vec3 mid = rng.near(t, 0.3) - n * rng.uniform(0.01, 0.4);
-    if (!(n.dot(mid - t[0]) < 0)) continue;  // the centre behind the plane
-    const Vec3 half = rng.uniform(0.05, 0.6) * rng.unit_vector();
+    const Real depth = rng.uniform(0.01, 0.4);  // first: see tests/support/random.h
+    const Vec3 mid = rng.near(t, 0.3) - n * depth;
+    if (!(n.dot(mid - t[0]) < 0)) continue;    // the centre behind the plane
+    const Vec3 direction = rng.unit_vector();  // first: see tests/support/random.h
+    const Vec3 half = rng.uniform(0.05, 0.6) * direction;
     const Vec3 p0 = mid - half;
     const Vec3 p1 = mid + half;
     const Real radius = rng.uniform(0.05, 0.5);

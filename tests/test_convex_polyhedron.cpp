@@ -254,8 +254,10 @@ TEST(ContactPolyhedron, CubeAgreesWithTheBoxRoutine) {
   ConvexPolyhedron moved;
   for (int trial = 0; trial < scaled(3000); ++trial) {
     const std::array<Vec3, 3> t = {rng.point(-1, 1), rng.point(-1, 1), rng.point(-1, 1)};
-    const Vec3 half(rng.uniform(0.05, 0.6), rng.uniform(0.05, 0.6), rng.uniform(0.05, 0.6));
-    const RigidTransform pose{rng.rotation(), (t[0] + t[1] + t[2]) / 3 + rng.uniform(0, 0.8) * rng.unit_vector()};
+    const Vec3 half = test::vec3_z_first([&] { return rng.uniform(0.05, 0.6); });
+    const Mat3 rotation = rng.rotation();
+    const Vec3 direction = rng.unit_vector();  // before the distance: see tests/support/random.h
+    const RigidTransform pose{rotation, (t[0] + t[1] + t[2]) / 3 + rng.uniform(0, 0.8) * direction};
     transform_polyhedron(make_convex_polyhedron(cube_points(half), kCubeFaces), pose, moved);
     ContactOptions options;
     if (trial % 3 == 1) options.margin = rng.uniform(0, 0.3);
@@ -293,8 +295,9 @@ TEST(ContactPolyhedron, RandomHullsAgainstBruteForceAndGjkEpa) {
   int not_least = 0;
   for (int trial = 0; trial < scaled(3000); ++trial) {
     const std::array<Vec3, 3> t = {rng.point(-1, 1), rng.point(-1, 1), rng.point(-1, 1)};
-    const Vec3 centre = (t[0] + t[1] + t[2]) / 3 + rng.uniform(0, 0.9) * rng.unit_vector();
-    const Vec3 stretch(rng.uniform(0.1, 0.7), rng.uniform(0.1, 0.7), rng.uniform(0.1, 0.7));
+    const Vec3 direction = rng.unit_vector();  // before the distance: see tests/support/random.h
+    const Vec3 centre = (t[0] + t[1] + t[2]) / 3 + rng.uniform(0, 0.9) * direction;
+    const Vec3 stretch = test::vec3_z_first([&] { return rng.uniform(0.1, 0.7); });
     const Mat3 turn = rng.rotation();
     std::vector<Vec3> points;
     std::vector<std::vector<int>> faces;
@@ -309,7 +312,10 @@ TEST(ContactPolyhedron, RandomHullsAgainstBruteForceAndGjkEpa) {
       std::vector<Real> angles;
       for (int i = 0; i < count; ++i) angles.push_back(rng.uniform(0, 2 * kPi));
       std::sort(angles.begin(), angles.end());
-      const Vec3 sweep = turn * Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(0.1, 0.8));
+      const Real sweep_z = rng.uniform(0.1, 0.8);  // z first: see tests/support/random.h
+      const Real sweep_y = rng.uniform(-0.3, 0.3);
+      const Real sweep_x = rng.uniform(-0.3, 0.3);
+      const Vec3 sweep = turn * Vec3(sweep_x, sweep_y, sweep_z);
       for (int i = 0; i < count; ++i)
         points.push_back(centre +
                          turn * Vec3(stretch.x() * std::cos(angles[std::size_t(i)]),

@@ -67,6 +67,15 @@ std::string str(const std::vector<Vec2>& points) {
   return s + "}";
 }
 
+// A Vec2 of two draws, y first: the order gcc gave the former Vec2(draw(), draw()) (see
+// tests/support/random.h).
+template <class Draw>
+Vec2 vec2_y_first(Draw&& draw) {
+  const Real y = draw();
+  const Real x = draw();
+  return {x, y};
+}
+
 Real cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // ------------------------------------------------------------------------------------------
@@ -80,23 +89,35 @@ std::vector<Vec2> random_cloud(Random& r, Cloud kind, int count) {
   const Eigen::Rotation2D<Real> rotation(angle);
   for (int i = 0; i < count; ++i) {
     switch (kind) {
-      case Cloud::square:
-        points.emplace_back(r.uniform(-1, 1), r.uniform(-1, 1));
+      case Cloud::square: {
+        const Real y = r.uniform(-1, 1);  // y first: see tests/support/random.h
+        const Real x = r.uniform(-1, 1);
+        points.emplace_back(x, y);
         break;
-      case Cloud::thin:
-        points.push_back(rotation * Vec2(r.uniform(-1, 1), r.uniform(-0.02, 0.02)));
+      }
+      case Cloud::thin: {
+        const Real y = r.uniform(-0.02, 0.02);
+        const Real x = r.uniform(-1, 1);
+        points.push_back(rotation * Vec2(x, y));
         break;
+      }
       case Cloud::circle: {
         const Real a = r.uniform(0, 2 * kPi);
         points.emplace_back(std::cos(a), 0.5 * std::sin(a));
         break;
       }
-      case Cloud::grid:
-        points.emplace_back(r.integer(0, 4), r.integer(0, 4));
+      case Cloud::grid: {
+        const int y = r.integer(0, 4);
+        const int x = r.integer(0, 4);
+        points.emplace_back(x, y);
         break;
-      case Cloud::clustered:
-        points.push_back(Vec2(r.normal(), 3 * r.normal()));
+      }
+      case Cloud::clustered: {
+        const Real y = 3 * r.normal();
+        const Real x = r.normal();
+        points.push_back(Vec2(x, y));
         break;
+      }
     }
   }
   return points;
@@ -376,8 +397,17 @@ bool has_sign_convention(const Mat3& m) {
   return true;
 }
 
+// The quaternion's coordinates are drawn z, y, x, w: see tests/support/random.h.
+Eigen::Quaternion<Real> random_quaternion(Random& r) {
+  const Real z = r.normal();
+  const Real y = r.normal();
+  const Real x = r.normal();
+  const Real w = r.normal();
+  return Eigen::Quaternion<Real>(w, x, y, z);
+}
+
 Mat3 random_rotation(Random& r) {
-  Eigen::Quaternion<Real> q(r.normal(), r.normal(), r.normal(), r.normal());
+  const Eigen::Quaternion<Real> q = random_quaternion(r);
   return q.normalized().toRotationMatrix();
 }
 
@@ -385,7 +415,7 @@ TEST(FitPrincipalAxes, RecoversAKnownFrame) {
   Random r(101);
   for (int trial = 0; trial < scaled(200); ++trial) {
     const Mat3 frame = random_rotation(r);
-    const Vec3 offset(r.uniform(-100, 100), r.uniform(-100, 100), r.uniform(-100, 100));
+    const Vec3 offset = test::vec3_z_first([&] { return r.uniform(-100, 100); });
     // Distinct spreads, well separated (ratio >= 1.5) so the eigenvectors are well conditioned.
     const Real c = r.uniform(0.1, 1), b = c * r.uniform(1.5, 3), a = b * r.uniform(1.5, 3);
     // A star symmetric about the offset: its scatter is frame * diag(a^2, b^2, c^2) * frame^T
@@ -409,8 +439,12 @@ TEST(FitPrincipalAxes, StretchedGaussianCloud) {
   for (int trial = 0; trial < scaled(20); ++trial) {
     const Mat3 frame = random_rotation(r);
     std::vector<Vec3> points;
-    for (int i = 0; i < 4000; ++i)
-      points.push_back(frame * Vec3(10 * r.normal(), 3 * r.normal(), 0.5 * r.normal()) + Vec3(5, -7, 1e3));
+    for (int i = 0; i < 4000; ++i) {
+      const Real z = 0.5 * r.normal();  // z first: see tests/support/random.h
+      const Real y = 3 * r.normal();
+      const Real x = 10 * r.normal();
+      points.push_back(frame * Vec3(x, y, z) + Vec3(5, -7, 1e3));
+    }
     const Mat3 axes = principal_axes(points.data(), points.size());
     ASSERT_TRUE(is_rotation(axes));
     // Sampling error of the directions is about 1/sqrt(N) relative to the spread ratios.
@@ -437,7 +471,7 @@ TEST(FitPrincipalAxes, DegenerateSets) {
     const Real magnitude = combination == 0 ? 1e6 : combination == 1 ? 1e-9 : combination == 2 ? 1 : 1e6;
     const Real spread = combination == 0 ? 1 : combination == 1 ? 1e-6 : combination == 2 ? 1e-6 : 1e-6;
     const Real tolerance = combination == 3 ? 2 : 1e-9;  // on 1 - |cos(angle)|
-    const Vec3 offset = magnitude * Vec3(r.normal(), r.normal(), r.normal());
+    const Vec3 offset = magnitude * test::vec3_z_first([&] { return r.normal(); });
 
     // Two points, and many collinear points (the first two at the ends): col(0) is the line.
     std::vector<Vec3> line = {offset + spread * frame.col(0), offset - spread * frame.col(0)};
@@ -451,8 +485,11 @@ TEST(FitPrincipalAxes, DegenerateSets) {
     // Coplanar points: col(2) is the plane's normal.
     std::vector<Vec3> plane = {offset + spread * frame.col(0), offset - spread * frame.col(0),
                                offset + spread * frame.col(1)};
-    for (int i = 0; i < trial % 10; ++i)
-      plane.push_back(offset + spread * (r.uniform(-1, 1) * frame.col(0) + r.uniform(-1, 1) * frame.col(1)));
+    for (int i = 0; i < trial % 10; ++i) {
+      const Real v = r.uniform(-1, 1);  // v first: see tests/support/random.h
+      const Real u = r.uniform(-1, 1);
+      plane.push_back(offset + spread * (u * frame.col(0) + v * frame.col(1)));
+    }
     axes = principal_axes(plane.data(), plane.size());
     ASSERT_TRUE(is_rotation(axes)) << "plane, trial " << trial;
     EXPECT_TRUE(has_sign_convention(axes));
@@ -471,7 +508,12 @@ TEST(FitPrincipalAxes, DeterministicAndOrderIndependent) {
   for (int trial = 0; trial < scaled(50); ++trial) {
     std::vector<Vec3> points;
     const Mat3 frame = random_rotation(r);
-    for (int i = 0; i < 16; ++i) points.push_back(frame * Vec3(4 * r.normal(), 2 * r.normal(), r.normal()));
+    for (int i = 0; i < 16; ++i) {
+      const Real z = r.normal();  // z first: see tests/support/random.h
+      const Real y = 2 * r.normal();
+      const Real x = 4 * r.normal();
+      points.push_back(frame * Vec3(x, y, z));
+    }
     const Mat3 first = principal_axes(points.data(), points.size());
     const Mat3 again = principal_axes(points.data(), points.size());
     EXPECT_EQ(first, again);
@@ -491,7 +533,11 @@ TEST(FitConvexHull, MatchesBruteForceOnIntegerGrids) {
     const int size = trial % 3 == 0 ? 2 : trial % 3 == 1 ? 4 : 9;
     const int count = r.integer(1, 40);
     std::vector<Vec2> points;
-    for (int i = 0; i < count; ++i) points.emplace_back(r.integer(0, size), r.integer(0, size));
+    for (int i = 0; i < count; ++i) {
+      const int y = r.integer(0, size);  // y first: see tests/support/random.h
+      const int x = r.integer(0, size);
+      points.emplace_back(x, y);
+    }
     expect_exact_hull(points, "grid trial " + std::to_string(trial));
     if (HasFatalFailure()) return;
   }
@@ -701,7 +747,9 @@ TEST(FitTriangle, LargeHull) {
   constexpr int kCount = 200;
   Eigen::Matrix<Real, 2, 2> map;
   map << r.uniform(0.5, 2), r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(0.5, 2);
-  const Vec2 offset(r.uniform(-10, 10), r.uniform(-10, 10));
+  const Real offset_y = r.uniform(-10, 10);  // y first: see tests/support/random.h
+  const Real offset_x = r.uniform(-10, 10);
+  const Vec2 offset(offset_x, offset_y);
   std::vector<Vec2> points;
   for (const Vec2& p : regular_polygon(kCount, 1, 0.2)) points.push_back(map * p + offset);
   Triangle2 general, isosceles;
@@ -752,7 +800,7 @@ TEST(FitTriangle, DegenerateInputs) {
 // (the base triangle), and the fits must still match brute force.
 
 Mat3 random_frame(Random& r) {
-  Eigen::Quaternion<Real> q(r.normal(), r.normal(), r.normal(), r.normal());
+  const Eigen::Quaternion<Real> q = random_quaternion(r);
   return q.normalized().toRotationMatrix();
 }
 
@@ -768,7 +816,7 @@ TEST(FitClusters, BoxSeenAlongItsAxis) {
   Random r(801);
   for (int trial = 0; trial < scaled(300); ++trial) {
     const Mat3 frame = random_frame(r);
-    const Vec3 center(r.uniform(-3, 3), r.uniform(-3, 3), r.uniform(-3, 3));
+    const Vec3 center = test::vec3_z_first([&] { return r.uniform(-3, 3); });
     const Real a = r.uniform(0.01, 1), b = trial % 3 == 0 ? 0 : r.uniform(0.01, 1), c = trial % 2 ? 0 : r.uniform(0, 1);
     std::vector<Vec3> corners;
     for (int copy = 0; copy < 2; ++copy)  // a box and a copy of itself: 16 corners
@@ -803,9 +851,9 @@ TEST(FitClusters, PrismsSeenAlongTheirAxis) {
   int checked = 0;
   for (int trial = 0; checked < scaled(30); ++trial) {
     const Mat3 frame = random_frame(r);
-    const Vec3 offset(r.uniform(-3, 3), r.uniform(-3, 3), r.uniform(-3, 3));
+    const Vec3 offset = test::vec3_z_first([&] { return r.uniform(-3, 3); });
     std::vector<Vec2> base;
-    for (int k = 0; k < 3; ++k) base.emplace_back(r.uniform(-1, 1), r.uniform(-1, 1));
+    for (int k = 0; k < 3; ++k) base.push_back(vec2_y_first([&] { return r.uniform(-1, 1); }));
     const Real base_area = std::abs(cross(base[1] - base[0], base[2] - base[0])) / 2;
     if (base_area < 0.05) continue;
     ++checked;
@@ -813,7 +861,7 @@ TEST(FitClusters, PrismsSeenAlongTheirAxis) {
     // different base, all seen along the axis.
     std::vector<Vec3> corners;
     std::vector<Vec2> second;
-    for (int k = 0; k < 3; ++k) second.emplace_back(r.uniform(-1, 1), r.uniform(-1, 1));
+    for (int k = 0; k < 3; ++k) second.push_back(vec2_y_first([&] { return r.uniform(-1, 1); }));
     for (const auto* tri : {&base, &second})
       for (const Vec2& q : *tri)
         for (const Real h : {0.0, r.uniform(0.1, 2)}) corners.push_back(offset + frame * Vec3(q.x(), q.y(), h));
@@ -853,17 +901,19 @@ TEST(FitEnclosure, NastyInputs) {
     const int count = r.integer(3, 16);
     const Vec2 offset = kind == 0 || kind == 3 ? Vec2(1e6, -1e6)
                         : kind == 5            ? Vec2(1e8, 3e7)
-                                               : Vec2(r.normal(), r.normal());
+                                               : vec2_y_first([&] { return r.normal(); });
     const Real spread = kind == 1 || kind == 3 ? 1e-9 : 1;
-    const Vec2 direction = Vec2(r.normal(), r.normal()).normalized();
+    const Vec2 direction = vec2_y_first([&] { return r.normal(); }).normalized();
     for (int i = 0; i < count; ++i) {
       if (kind == 2 || kind == 5) {  // nearly collinear: off the line by a few ulps or less
-        points.push_back(offset + spread * r.uniform(-1, 1) * direction +
-                         Vec2(r.normal(), r.normal()) * 1e-15 * (kind == 5 ? 1e8 : 1));
+        // The noise first, y first, then the position along the line: see tests/support/random.h.
+        const Vec2 noise = vec2_y_first([&] { return r.normal(); });
+        const Real along = r.uniform(-1, 1);
+        points.push_back(offset + spread * along * direction + noise * 1e-15 * (kind == 5 ? 1e8 : 1));
       } else if (kind == 4) {  // collinear in floating point (not exactly), then one point off
         points.push_back(offset + spread * r.uniform(-1, 1) * direction + (i == 0 ? Vec2(0, 1e-12) : Vec2(0, 0)));
       } else {
-        points.push_back(offset + spread * Vec2(r.uniform(-1, 1), r.uniform(-1, 1)));
+        points.push_back(offset + spread * vec2_y_first([&] { return r.uniform(-1, 1); }));
       }
     }
     const std::string label = "trial " + std::to_string(trial) + " " + str(points);
@@ -911,7 +961,7 @@ TEST(FitPerformance, TwelvePointTimings) {
   std::vector<std::vector<Vec2>> inputs;
   for (int i = 0; i < 64; ++i) inputs.push_back(random_cloud(r, Cloud::circle, 12));  // 12 hull points
   std::vector<Vec3> cloud;
-  for (int i = 0; i < 12; ++i) cloud.emplace_back(r.normal(), r.normal(), r.normal());
+  for (int i = 0; i < 12; ++i) cloud.push_back(test::vec3_z_first([&] { return r.normal(); }));
   constexpr int kCalls = 2000;
   Real sink = 0;
   auto time = [&](const char* name, auto call) {

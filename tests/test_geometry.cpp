@@ -258,7 +258,8 @@ TEST(GeometryRayTriangle, MatchesLinearSolveAwayFromEdges) {
     const Vec3 a = rng.point(-2, 2), b = rng.point(-2, 2), c = rng.point(-2, 2);
     // Aimed at a point of the triangle's plane around it, with a random scale and range.
     const Vec3 origin = rng.point(-4, 4);
-    const Vec3 aim = a + rng.uniform(-0.3, 1.3) * (b - a) + rng.uniform(-0.3, 1.3) * (c - a);
+    const Real toward_c = rng.uniform(-0.3, 1.3);  // first: see tests/support/random.h
+    const Vec3 aim = a + rng.uniform(-0.3, 1.3) * (b - a) + toward_c * (c - a);
     const Ray ray{origin, (aim - origin) * rng.uniform(0.2, 2), rng.uniform(-1, 0.5),
                   rng.chance(0.5) ? kInf : rng.uniform(0.5, 3)};
     using L = long double;
@@ -439,7 +440,8 @@ void check_watertight_from(const Mesh& m, Random& rng, const Vec3& origin_center
     return front == static_cast<int>(faces.size()) || back == static_cast<int>(faces.size());
   };
   for (int i = 0; i < rays; ++i) {
-    const Vec3 origin = origin_center + origin_radius * (origin_inside ? rng.uniform(0, 1) : 1.0) * rng.unit_vector();
+    const Vec3 direction = rng.unit_vector();  // first: see tests/support/random.h
+    const Vec3 origin = origin_center + origin_radius * (origin_inside ? rng.uniform(0, 1) : 1.0) * direction;
     Vec3 target;
     std::vector<int> around;
     std::string what;
@@ -474,7 +476,11 @@ TEST(GeometryRayTriangle, WatertightOnConvexPolyhedra) {
     EXPECT_GT(checked, scaled(6000));
     // Random rays from inside a closed convex mesh hit it at least once, at t >= 0.
     for (int i = 0; i < scaled(5000); ++i) {
-      const Ray ray{0.5 * rng.uniform(0, 1) * rng.unit_vector(), rng.unit_vector() * rng.uniform(0.001, 1000), 0, kInf};
+      // Each product's right operand first: see tests/support/random.h.
+      const Vec3 origin_direction = rng.unit_vector();
+      const Vec3 origin = 0.5 * rng.uniform(0, 1) * origin_direction;
+      const Real length = rng.uniform(0.001, 1000);
+      const Ray ray{origin, rng.unit_vector() * length, 0, kInf};
       ASSERT_GE(m.count_hits(ray), 1);
     }
   }
@@ -561,7 +567,8 @@ TEST(GeometryTriangleTriangle, MatchesExactReferenceOnIntegerGrid) {
   Random rng(21);
   int positives = 0, negatives = 0, failures = 0;
   for (int i = 0; i < scaled(6000); ++i) {
-    check_tri_tri(grid_triangle(rng, -2, 2, 1, 0.2), grid_triangle(rng, -2, 2, 1, 0.2), positives, negatives, failures);
+    const auto second = grid_triangle(rng, -2, 2, 1, 0.2);  // the second first: see tests/support/random.h
+    check_tri_tri(grid_triangle(rng, -2, 2, 1, 0.2), second, positives, negatives, failures);
   }
   EXPECT_GT(positives, scaled(6000) / 10);
   EXPECT_GT(negatives, scaled(6000) / 10);
@@ -574,7 +581,10 @@ TEST(GeometryTriangleTriangle, MatchesExactReferenceWhenCoplanarOrSharingFeature
   for (int i = 0; i < scaled(6000); ++i) {
     // Both triangles in the plane o + i u + j v (small integer basis), or sharing a corner or edge.
     const Vec3 o = rng.grid_point(-1, 1), u = rng.grid_point(-1, 1), v = rng.grid_point(-1, 1);
-    const auto in_plane = [&] { return Vec3(o + rng.integer(-2, 2) * u + rng.integer(-2, 2) * v); };
+    const auto in_plane = [&] {
+      const int j = rng.integer(-2, 2);  // j first: see tests/support/random.h
+      return Vec3(o + rng.integer(-2, 2) * u + j * v);
+    };
     std::array<Vec3, 3> p, q;
     const int mode = rng.integer(0, 2);
     if (mode == 0) {
@@ -599,8 +609,8 @@ TEST(GeometryTriangleTriangle, MatchesExactReferenceOnFineDyadicGrid) {
   Random rng(23);
   int positives = 0, negatives = 0, failures = 0;
   for (int i = 0; i < scaled(4000); ++i) {
-    check_tri_tri(grid_triangle(rng, -1, 1, 1024, 0.05), grid_triangle(rng, -1, 1, 1024, 0.05), positives, negatives,
-                  failures);
+    const auto second = grid_triangle(rng, -1, 1, 1024, 0.05);  // the second first: see tests/support/random.h
+    check_tri_tri(grid_triangle(rng, -1, 1, 1024, 0.05), second, positives, negatives, failures);
   }
   EXPECT_GT(positives, scaled(4000) / 20);
   EXPECT_GT(negatives, scaled(4000) / 20);
@@ -805,7 +815,8 @@ TEST(GeometryClosestPoint, MatchesSamplingOnRandomTriangles) {
       t = grid_triangle(rng, -2, 2, 2, 1.0);  // degenerate
     } else if (rng.chance(0.2)) {
       t = {rng.point(-2, 2), rng.point(-2, 2), Vec3::Zero()};  // sliver
-      t[2] = t[0] + rng.uniform(-1, 2) * (t[1] - t[0]) + 1e-9 * rng.unit_vector();
+      const Vec3 off_line = rng.unit_vector();                 // first: see tests/support/random.h
+      t[2] = t[0] + rng.uniform(-1, 2) * (t[1] - t[0]) + 1e-9 * off_line;
     } else {
       t = {rng.point(-2, 2), rng.point(-2, 2), rng.point(-2, 2)};
     }
@@ -1095,8 +1106,11 @@ TEST(GeometryBoxBox, RandomRotationsNeverMissAContainedCorner) {
   for (int i = 0; i < scaled(5000); ++i) {
     const Aabb a{rng.point(-2, 0), rng.point(0, 2)};
     const Mat3 r = rng.rotation();
-    const Vec3 h = rng.point(0, 1).cwiseProduct(Vec3(rng.chance(0.3) ? 0 : 1, 1, rng.chance(0.3) ? 0 : 1));
-    const Vec3 corner_sign(rng.chance(0.5) ? 1 : -1, rng.chance(0.5) ? 1 : -1, rng.chance(0.5) ? 1 : -1);
+    const Vec3 extent = rng.point(0, 1);
+    const Real flat_z = rng.chance(0.3) ? 0 : 1;  // z first: see tests/support/random.h
+    const Real flat_x = rng.chance(0.3) ? 0 : 1;
+    const Vec3 h = extent.cwiseProduct(Vec3(flat_x, 1, flat_z));
+    const Vec3 corner_sign = vec3_z_first([&] { return rng.chance(0.5) ? 1 : -1; });
     const Vec3 corner = rng.point(-1.9, 1.9).cwiseMax(a.min).cwiseMin(a.max);  // a point of a
     const Vec3 center = corner - r * h.cwiseProduct(corner_sign);              // b's corner there
     ASSERT_TRUE(overlaps(a, Obb{center, r, h})) << i;

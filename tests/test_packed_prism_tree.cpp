@@ -100,7 +100,8 @@ void expect_same_answers(const Tree<V>& tree, const PackedPrismTree& packed, int
   for (int i = 0; i < queries; ++i) {
     // Rays: the closest hit and the candidates (every leaf whose prism the ray meets) as the exact tree's.
     Ray ray{random_point_near(r, box, 0.5), Vec3::Zero()};
-    ray.direction = (random_point_near(r, box, 0) - ray.origin) * r.uniform(0.5, 2);
+    const Real scale = r.uniform(0.5, 2);  // first: see tests/support/random.h
+    ray.direction = (random_point_near(r, box, 0) - ray.origin) * scale;
     if (ray.direction.isZero(0)) continue;
     const auto closest = ray_closest_hit(packed, ray);
     const auto expected = ray_closest_hit(tree, ray);

@@ -101,6 +101,16 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
 
   std::mt19937 rng(static_cast<unsigned>(seed));
   std::uniform_real_distribution<float> size(0.3f, 0.8f), unit(0, 1);
+  // Several draws never share one call: the order of a call's arguments is unspecified (gcc
+  // evaluates them last first, clang first first). They are drawn one per statement in the order
+  // gcc gave the former one-call forms, last argument first, so the scene is the one measured
+  // before, now on both compilers.
+  const auto size_vector = [&](float offset) {
+    const float z = size(rng) + offset;
+    const float y = size(rng) + offset;
+    const float x = size(rng) + offset;
+    return btVector3(x, y, z);
+  };
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btRigidBody>> rigid;
   boxtree::Vec3 lo = terrain.vertices.front(), hi = lo;
@@ -111,26 +121,29 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
         shapes.push_back(std::make_unique<btSphereShape>(size(rng)));
         break;
       case 1:
-        shapes.push_back(std::make_unique<btBoxShape>(btVector3(size(rng), size(rng), size(rng))));
+        shapes.push_back(std::make_unique<btBoxShape>(size_vector(0)));
         break;
-      case 2:
-        shapes.push_back(std::make_unique<btCapsuleShapeZ>(size(rng) * 0.7f, size(rng) * 1.5f));
+      case 2: {
+        const float height = size(rng) * 1.5f;  // before the radius: see above
+        shapes.push_back(std::make_unique<btCapsuleShapeZ>(size(rng) * 0.7f, height));
         break;
+      }
       case 3:
-        shapes.push_back(std::make_unique<btCylinderShapeZ>(btVector3(size(rng), size(rng), size(rng))));
+        shapes.push_back(std::make_unique<btCylinderShapeZ>(size_vector(0)));
         break;
       default: {
         auto hull = std::make_unique<btConvexHullShape>();
-        for (int k = 0; k < 12; ++k)
-          hull->addPoint(btVector3(size(rng) - 0.55f, size(rng) - 0.55f, size(rng) - 0.55f), false);
+        for (int k = 0; k < 12; ++k) hull->addPoint(size_vector(-0.55f), false);
         hull->recalcLocalAabb();
         shapes.push_back(std::move(hull));
       }
     }
     btVector3 inertia;
     shapes.back()->calculateLocalInertia(1, inertia);
-    const btVector3 p(btScalar(lo.x() + (hi.x() - lo.x()) * (0.1 + 0.8 * unit(rng))),
-                      btScalar(lo.y() + (hi.y() - lo.y()) * (0.1 + 0.8 * unit(rng))), btScalar(20 + 10 * unit(rng)));
+    const btScalar pz = btScalar(20 + 10 * unit(rng));  // z first: see above
+    const btScalar py = btScalar(lo.y() + (hi.y() - lo.y()) * (0.1 + 0.8 * unit(rng)));
+    const btScalar px = btScalar(lo.x() + (hi.x() - lo.x()) * (0.1 + 0.8 * unit(rng)));
+    const btVector3 p(px, py, pz);
     btRigidBody::btRigidBodyConstructionInfo info(1, nullptr, shapes.back().get(), inertia);
     info.m_startWorldTransform.setOrigin(p);
     rigid.push_back(std::make_unique<btRigidBody>(info));
@@ -233,9 +246,11 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
     btVector3 inertia;
     shapes.back()->calculateLocalInertia(2, inertia);
     btRigidBody::btRigidBodyConstructionInfo info(2, nullptr, shapes.back().get(), inertia);
-    info.m_startWorldTransform.setOrigin(btVector3(btScalar(lo.x() + (hi.x() - lo.x()) * (0.3 + 0.4 * unit(rng))),
-                                                   btScalar(lo.y() + (hi.y() - lo.y()) * (0.3 + 0.4 * unit(rng))),
-                                                   btScalar(hi.z() + 3 + 3 * unit(rng))));
+    // z first, then y, then x: gcc's order for the former btVector3 of three draws.
+    const btScalar z = btScalar(hi.z() + 3 + 3 * unit(rng));
+    const btScalar y = btScalar(lo.y() + (hi.y() - lo.y()) * (0.3 + 0.4 * unit(rng)));
+    const btScalar x = btScalar(lo.x() + (hi.x() - lo.x()) * (0.3 + 0.4 * unit(rng)));
+    info.m_startWorldTransform.setOrigin(btVector3(x, y, z));
     bodies.push_back(std::make_unique<btRigidBody>(info));
     bodies.back()->setRollingFriction(0.1f);
     world.addRigidBody(bodies.back().get());

@@ -30,6 +30,19 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// Several random draws never share one call: the order of a call's arguments is unspecified (gcc
+// evaluates them last first, clang first first). They are drawn one per statement in the order
+// gcc gave the former one-call forms, last argument first, so the inputs are the ones measured
+// before, now on both compilers.
+
+// A point of `box`, z first, then y, then x (see above).
+Vec3 random_point_in(Random& random, const Aabb& box) {
+  const Real z = random.uniform(box.min.z(), box.max.z());
+  const Real y = random.uniform(box.min.y(), box.max.y());
+  const Real x = random.uniform(box.min.x(), box.max.x());
+  return {x, y, z};
+}
+
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // ---------------------------------------------------------------- planar (Section 2)
@@ -58,7 +71,10 @@ void run_planar(std::ofstream& csv, std::size_t max_n, bool quick) {
       Random random(7);
       const int queries = 200000;
       std::vector<Vec2> points(queries);
-      for (auto& p : points) p = Vec2(random.uniform(), random.uniform());
+      for (auto& p : points) {
+        const Real y = random.uniform();  // y first: see the top of the file
+        p = Vec2(random.uniform(), y);
+      }
       std::size_t checksum = 0;
       for (int i = 0; i < queries / 10; ++i) checksum += *planar::locate_point(tree, points[std::size_t(i)]);
       planar::PlanarQueryStats qstats;
@@ -105,8 +121,7 @@ std::vector<Line> probe_lines(const TriangleMesh& mesh, const std::vector<Line>&
   std::vector<Line> lines = witnesses;
   Random random(seed);
   for (int i = 0; i < random_count; ++i) {
-    const Vec3 inside(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()),
-                      random.uniform(box.min.z(), box.max.z()));
+    const Vec3 inside = random_point_in(random, box);
     if (i % 2 == 0) {
       const Vec3 from = c + r * random.unit_vector();
       lines.push_back({from, (inside - from).normalized()});
@@ -247,23 +262,26 @@ void compare_on_terrain(std::ofstream& csv, const std::string& method, const std
   std::vector<QueryStats> vertical(count), random_rays(count), closest(count), midphase(count);
   for (int i = 0; i < count; ++i) {
     Ray ray;
-    ray.origin =
-        Vec3(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()), box.max.z() + 1);
+    const Real origin_y = random.uniform(box.min.y(), box.max.y());  // y first: see the top of the file
+    ray.origin = Vec3(random.uniform(box.min.x(), box.max.x()), origin_y, box.max.z() + 1);
     ray.direction = -Vec3::UnitZ();
     ray_all_hits(
         tree, ray, [](const RayHit&) { return true; }, &vertical[std::size_t(i)]);
     ray_closest_hit(tree, ray, &closest[std::size_t(i)]);
     Ray any;
-    const Vec3 inside(random.uniform(box.min.x(), box.max.x()), random.uniform(box.min.y(), box.max.y()),
-                      random.uniform(box.min.z(), box.max.z()));
+    const Vec3 inside = random_point_in(random, box);
     any.origin = box.center() + box.extent().norm() * random.unit_vector();
     any.direction = (inside - any.origin).normalized();
     ray_all_hits(
         tree, any, [](const RayHit&) { return true; }, &random_rays[std::size_t(i)]);
     // Bodies of the drop scene are 0.25-0.55 m, dropped over the middle |x|, |y| <= 11 m.
     const Real size = random.uniform(0.25, 0.55);
-    const Vec3 half = Vec3(random.uniform(0.5, 1), random.uniform(0.5, 1), random.uniform(0.5, 1)) * size;
-    const Vec3 c(random.uniform(-11, 11), random.uniform(-11, 11), 0);
+    const Real half_z = random.uniform(0.5, 1);  // z first: see the top of the file
+    const Real half_y = random.uniform(0.5, 1);
+    const Real half_x = random.uniform(0.5, 1);
+    const Vec3 half = Vec3(half_x, half_y, half_z) * size;
+    const Real c_y = random.uniform(-11, 11);  // y first
+    const Vec3 c(random.uniform(-11, 11), c_y, 0);
     Ray down;
     down.origin = Vec3(c.x(), c.y(), box.max.z() + 1);
     down.direction = -Vec3::UnitZ();

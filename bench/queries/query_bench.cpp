@@ -71,8 +71,12 @@ std::vector<Aabb> resting_boxes(const boxtree::PackedAabbTree& tree, int cells, 
     const auto hit = boxtree::ray_closest_hit(tree, down);
     if (!hit) continue;
     const Vec3 center(x, y, bounds.max.z() + 1 - hit->t);
-    const Vec3 half(cell * random.uniform(0.75, 2.25), cell * random.uniform(0.75, 2.25),
-                    cell * random.uniform(0.2, 2));
+    // z first, then y, then x: gcc's order for the former Vec3 of three draws (a call's arguments
+    // are evaluated in an unspecified order; this keeps the boxes measured before, on any compiler).
+    const Real half_z = cell * random.uniform(0.2, 2);
+    const Real half_y = cell * random.uniform(0.75, 2.25);
+    const Real half_x = cell * random.uniform(0.75, 2.25);
+    const Vec3 half(half_x, half_y, half_z);
     boxes.push_back(Aabb{center - half, center + half});
   }
   return boxes;

@@ -309,8 +309,22 @@ int hull_points_of(BodyMix mix) {
 // `count` points on the unit sphere, spread evenly (a Fibonacci lattice: z in even steps, longitude
 // by the golden angle), jittered and turned at random. Evenly spread, their hull holds the origin
 // well inside (ODE's convexes need it; independent random points can all fall on one side).
+// Random draws never share one call here: the order of a call's arguments is unspecified (gcc
+// evaluates them last first, clang first first). They are drawn one per statement in the order
+// gcc gave the former one-call forms, last argument first, so that the scenes are the ones gcc
+// built before (Scene.DefaultScenesUnchanged pins them), now on every compiler.
+
+// Three draws uniform in [lo, hi), z first, then y, then x (see above).
+Vec3 uniform_z_first(boxtree::Random& random, Real lo, Real hi) {
+  const Real z = random.uniform(lo, hi);
+  const Real y = random.uniform(lo, hi);
+  const Real x = random.uniform(lo, hi);
+  return {x, y, z};
+}
+
 std::vector<Vec3> points_around_sphere(int count, boxtree::Random& random) {
-  const Quat turn(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), random.unit_vector()));
+  const Vec3 turn_axis = random.unit_vector();  // the axis first: see above
+  const Quat turn(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), turn_axis));
   const Real golden_angle = kPi * (3 - std::sqrt(Real(5)));
   std::vector<Vec3> points;
   for (int k = 0; k < count; ++k) {
@@ -380,7 +394,7 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
         b.colour = {0.85, 0.25, 0.2};
         break;
       case Shape::box:
-        b.half_extents = Vec3(random.uniform(0.5, 1), random.uniform(0.5, 1), random.uniform(0.5, 1)) * size;
+        b.half_extents = uniform_z_first(random, 0.5, 1) * size;
         volume = 8 * b.half_extents.prod();
         b.colour = {0.95, 0.7, 0.2};
         break;
@@ -404,7 +418,7 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
         } else {
           mesh = make_icosahedron(1);
         }
-        const Vec3 stretch(random.uniform(0.6, 1.2), random.uniform(0.6, 1.2), random.uniform(0.6, 1.2));
+        const Vec3 stretch = uniform_z_first(random, 0.6, 1.2);
         for (Vec3& v : mesh.vertices) v = v.cwiseProduct(stretch) * size;
         b.colour = {0.2, 0.75, 0.7};
         break;

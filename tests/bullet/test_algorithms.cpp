@@ -25,21 +25,32 @@ Real terrain_height(const AnyTree& tree, Real x, Real y) {
   return hit ? 1000 - hit->t : -1e30;
 }
 
+// A btVector3 of three draws from `d`, z first, then y, then x: the order gcc gave the former
+// btVector3(d(rng), d(rng), d(rng)) (see tests/support/random.h).
+btVector3 draw_vector(std::uniform_real_distribution<float>& d, std::mt19937& rng) {
+  const btScalar z = d(rng);
+  const btScalar y = d(rng);
+  const btScalar x = d(rng);
+  return btVector3(x, y, z);
+}
+
 std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
   std::uniform_real_distribution<float> s(0.3f, 0.8f);
   switch (kind % 5) {
     case 0:
       return std::make_unique<btSphereShape>(s(rng));
     case 1:
-      return std::make_unique<btBoxShape>(btVector3(s(rng), s(rng), s(rng)));
-    case 2:
-      return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, s(rng) * 1.5f);
+      return std::make_unique<btBoxShape>(draw_vector(s, rng));
+    case 2: {
+      const float height = s(rng) * 1.5f;  // before the radius: see tests/support/random.h
+      return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, height);
+    }
     case 3:
-      return std::make_unique<btCylinderShapeZ>(btVector3(s(rng), s(rng), s(rng)));
+      return std::make_unique<btCylinderShapeZ>(draw_vector(s, rng));
     default: {
       auto hull = std::make_unique<btConvexHullShape>();
       std::uniform_real_distribution<float> p(-0.6f, 0.6f);
-      for (int i = 0; i < 12; ++i) hull->addPoint(btVector3(p(rng), p(rng), p(rng)), false);
+      for (int i = 0; i < 12; ++i) hull->addPoint(draw_vector(p, rng), false);
       hull->recalcLocalAabb();
       // Faces: Bullet's hull-hull pairs use its clipping; boxtree keeps GJK for hulls unless
       // AlgorithmSettings::hullFaces (the test below).
@@ -69,7 +80,8 @@ struct DropScene {
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> xy(8, 42), angle(0, 3.14f);
     for (int i = 0; i < count; ++i) {
-      const btVector3 p(xy(rng), xy(rng), 14 + float(i % 7) * 1.6f);
+      const float y = xy(rng);  // y first: see tests/support/random.h
+      const btVector3 p(xy(rng), y, 14 + float(i % 7) * 1.6f);
       const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), angle(rng));
       btRigidBody* body = world.add(make_body_shape(i, rng), 1, p, q);
       // Some rolling resistance, so that spheres and cylinders settle in the hollows instead of
@@ -188,14 +200,18 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
   for (int trial = 0; trial < 60; ++trial) {
     auto make_hull = [&](std::mt19937 r) {
       auto hull = std::make_unique<btConvexHullShape>();
-      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(btVector3(p(r), p(r), p(r)) * 0.8f, false);
+      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(draw_vector(p, r) * 0.8f, false);
       hull->recalcLocalAabb();
       hull->initializePolyhedralFeatures();
       return hull;
     };
     const std::mt19937 shape_seed(rng());
-    const btVector3 at(xy(rng), xy(rng), 0);
-    const btQuaternion turn(btVector3(unit(rng), unit(rng), unit(rng) + 0.01f).normalized(), angle(rng));
+    const float at_y = xy(rng);  // y first: see tests/support/random.h
+    const btVector3 at(xy(rng), at_y, 0);
+    const btScalar turn_angle = angle(rng);  // the angle first, then the axis z, y, x: see tests/support/random.h
+    const btScalar axis_z = unit(rng) + 0.01f;
+    const btScalar axis_y = unit(rng);
+    const btQuaternion turn(btVector3(unit(rng), axis_y, axis_z).normalized(), turn_angle);
     const btScalar sink = btScalar(0.02 + 0.08 * (trial % 5) / 4.0);  // 2 to 10 cm into the ground
     float deepest[2] = {0, 0};
     int points[2] = {0, 0};

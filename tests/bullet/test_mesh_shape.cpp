@@ -53,8 +53,14 @@ TEST(BulletMeshShape, ProcessAllTrianglesIsExactAndWithinBulletsSet) {
     const bool by_box = method == "aabb";
     std::size_t ours_total = 0, bullet_total = 0;
     for (int q = 0; q < 300; ++q) {
-      const btVector3 c(btScalar(pos(rng)), btScalar(pos(rng)), btScalar(zpos(rng)));
-      const btVector3 h(btScalar(size(rng)), btScalar(size(rng)), btScalar(q % 10 == 0 ? 0 : size(rng)));
+      const btScalar c_z = btScalar(zpos(rng));  // z first: see tests/support/random.h
+      const btScalar c_y = btScalar(pos(rng));
+      const btScalar c_x = btScalar(pos(rng));
+      const btVector3 c(c_x, c_y, c_z);
+      const btScalar h_z = btScalar(q % 10 == 0 ? 0 : size(rng));  // z first: see tests/support/random.h
+      const btScalar h_y = btScalar(size(rng));
+      const btScalar h_x = btScalar(size(rng));
+      const btVector3 h(h_x, h_y, h_z);
       const btVector3 lo = c - h, hi = c + h;
       const Aabb box{to_vec3(lo), to_vec3(hi)};
       FacetSet expected;
@@ -144,8 +150,14 @@ TEST(BulletMeshShape, LocalScalingIncludingNegativeMatchesBruteForce) {
     std::mt19937 rng(9);
     std::uniform_real_distribution<double> u(0, 1);
     for (int q = 0; q < 100; ++q) {
-      const btVector3 c(btScalar(u(rng) * 100), btScalar(u(rng) * 25), btScalar(-u(rng) * 12));
-      const btVector3 h(btScalar(u(rng) * 8), btScalar(u(rng) * 8), btScalar(u(rng) * 4));
+      const btScalar c_z = btScalar(-u(rng) * 12);  // z first: see tests/support/random.h
+      const btScalar c_y = btScalar(u(rng) * 25);
+      const btScalar c_x = btScalar(u(rng) * 100);
+      const btVector3 c(c_x, c_y, c_z);
+      const btScalar h_z = btScalar(u(rng) * 4);  // z first: see tests/support/random.h
+      const btScalar h_y = btScalar(u(rng) * 8);
+      const btScalar h_x = btScalar(u(rng) * 8);
+      const btVector3 h(h_x, h_y, h_z);
       CollectTriangles cb;
       shape.processAllTriangles(&cb, c - h, c + h);
       const Aabb box{to_vec3(c - h), to_vec3(c + h)};
@@ -361,8 +373,14 @@ TEST(BulletMeshShape, ShapesShareOneBuiltTree) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> pos(0, 50), size(0.5, 5);
   for (int q = 0; q < 50; ++q) {
-    const btVector3 c(btScalar(pos(rng)), btScalar(pos(rng)), btScalar(pos(rng) / 10));
-    const btVector3 h(btScalar(size(rng)), btScalar(size(rng)), btScalar(size(rng)));
+    const btScalar c_z = btScalar(pos(rng) / 10);  // z first: see tests/support/random.h
+    const btScalar c_y = btScalar(pos(rng));
+    const btScalar c_x = btScalar(pos(rng));
+    const btVector3 c(c_x, c_y, c_z);
+    const btScalar h_z = btScalar(size(rng));  // z first: see tests/support/random.h
+    const btScalar h_y = btScalar(size(rng));
+    const btScalar h_x = btScalar(size(rng));
+    const btVector3 h(h_x, h_y, h_z);
     EXPECT_EQ(collect(a, c - h, c + h), collect(from_mesh, c - h, c + h)) << "query " << q;
   }
   // Two static instances of the tree side by side, a sphere dropped on each: both land on their
@@ -422,8 +440,14 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
     const int rays = 1500;
     std::uint64_t triangles_seen = 0;
     for (int i = 0; i < rays; ++i) {
-      const btVector3 from = pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(u(rng) / 2 + 10)));
-      const btVector3 to = pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(-u(rng) / 4 - 5)));
+      const btScalar from_z = btScalar(u(rng) / 2 + 10);  // z first: see tests/support/random.h
+      const btScalar from_y = btScalar(u(rng));
+      const btScalar from_x = btScalar(u(rng));
+      const btVector3 from = pose(btVector3(from_x, from_y, from_z));
+      const btScalar to_z = btScalar(-u(rng) / 4 - 5);  // z first: see tests/support/random.h
+      const btScalar to_y = btScalar(u(rng));
+      const btScalar to_x = btScalar(u(rng));
+      const btVector3 to = pose(btVector3(to_x, to_y, to_z));
       ClosestWithTriangle a(from, to), b(from, to);
       w.bullet.world.rayTest(from, to, a);
       const auto before = w.shape->counters().triangles;
@@ -475,8 +499,13 @@ TEST(BulletMeshShape, ConvexSweepTestMatchesBullet) {
                                 : i % 3 == 1 ? static_cast<btConvexShape*>(&box)
                                              : &capsule;
     const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(u(rng) / 10));
-    const btTransform from(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(15 + u(rng) / 5))));
-    const btTransform to(r0, pose(btVector3(btScalar(u(rng)), btScalar(u(rng)), btScalar(-8))));
+    const btScalar from_at_z = btScalar(15 + u(rng) / 5);  // z first: see tests/support/random.h
+    const btScalar from_at_y = btScalar(u(rng));
+    const btScalar from_at_x = btScalar(u(rng));
+    const btTransform from(r0, pose(btVector3(from_at_x, from_at_y, from_at_z)));
+    const btScalar to_at_y = btScalar(u(rng));  // y first: see tests/support/random.h
+    const btScalar to_at_x = btScalar(u(rng));
+    const btTransform to(r0, pose(btVector3(to_at_x, to_at_y, btScalar(-8))));
     btCollisionWorld::ClosestConvexResultCallback a(from.getOrigin(), to.getOrigin()),
         b(from.getOrigin(), to.getOrigin());
     w.bullet.world.convexSweepTest(cast, from, to, a);

@@ -361,9 +361,16 @@ TEST(OdeGeom, RayClosestHitsMatchOdeTrimesh) {
   int hits = 0, facet_mismatches = 0, only_one_hits = 0;
   const int rays = 2000;
   for (int i = 0; i < rays; ++i) {
-    const Vec3 origin(random.uniform(-5, 45), random.uniform(-5, 45), random.uniform(-2, 15));
+    const Real origin_z = random.uniform(-2, 15);  // z first: see tests/support/random.h
+    const Real origin_y = random.uniform(-5, 45);
+    const Real origin_x = random.uniform(-5, 45);
+    const Vec3 origin(origin_x, origin_y, origin_z);
     Vec3 dir = random.unit_vector();
-    if (i % 2 == 0) dir = (Vec3(random.uniform(0, 40), random.uniform(0, 40), 1) - origin).normalized();
+    if (i % 2 == 0) {
+      const Real target_y = random.uniform(0, 40);  // y first: see tests/support/random.h
+      const Real target_x = random.uniform(0, 40);
+      dir = (Vec3(target_x, target_y, 1) - origin).normalized();
+    }
     dGeomRaySet(ray, origin.x(), origin.y(), origin.z(), dir.x(), dir.y(), dir.z());
     std::vector<dContactGeom> ours, theirs;
     const int n_ours = collide(mesh, ray, ours, 4);

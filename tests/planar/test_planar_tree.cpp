@@ -128,9 +128,11 @@ void check_locate(const std::vector<Rect>& cells, const std::string& what) {
   const Rect domain = tree.domain();
   std::vector<Vec2> points;
   Random random(cells.size());
-  for (int i = 0; i < 300; ++i)
-    points.emplace_back(random.uniform(domain.min.x() - 0.1, domain.max.x() + 0.1),
-                        random.uniform(domain.min.y() - 0.1, domain.max.y() + 0.1));
+  for (int i = 0; i < 300; ++i) {
+    const Real y = random.uniform(domain.min.y() - 0.1, domain.max.y() + 0.1);  // y first: see tests/support/random.h
+    const Real x = random.uniform(domain.min.x() - 0.1, domain.max.x() + 0.1);
+    points.emplace_back(x, y);
+  }
   const std::size_t stride = std::max<std::size_t>(1, cells.size() / 200);
   for (std::size_t i = 0; i < cells.size(); i += stride) {
     const Rect& c = cells[i];

@@ -47,7 +47,12 @@ inline Vec3 random_point_near(Random& r, const Aabb& box, double margin = 0.2) {
 }
 
 inline Mat3 random_rotation(Random& r) {
-  Eigen::Quaterniond q(r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1));
+  // z, y, x, then w: gcc's order for the former Quaterniond(w, x, y, z) of four draws (see tests/support/random.h).
+  const Real z = r.uniform(-1, 1);
+  const Real y = r.uniform(-1, 1);
+  const Real x = r.uniform(-1, 1);
+  const Real w = r.uniform(-1, 1);
+  Eigen::Quaterniond q(w, x, y, z);
   q.normalize();
   return q.toRotationMatrix();
 }
@@ -72,7 +77,8 @@ void check_rays(const TreeT& tree, int count, std::uint64_t seed, const std::str
       const Vec3 target = (1 - u - v) * mesh.corner(f, 0) + u * mesh.corner(f, 1) + v * mesh.corner(f, 2);
       ray.direction = (target - ray.origin) * r.uniform(0.1, 3);
     } else {
-      ray.direction = r.unit_vector() * r.uniform(0.1, 10);
+      const Real length = r.uniform(0.1, 10);  // first: see tests/support/random.h
+      ray.direction = r.unit_vector() * length;
     }
     if (ray.direction.isZero(0)) continue;
     if (i % 5 == 0) ray.t_max = r.uniform(0.2, 2);  // segments
