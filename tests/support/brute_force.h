@@ -1,19 +1,22 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// Reference answers by exhaustive search: every facet, every node, every facet pair. The geometry
-// of one triangle against one shape is the library's exact per-triangle test (geometry.h; those
-// are checked against independent references in tests/test_geometry.cpp), so that answers agree
-// bit for bit where rounding decides a touching contact. Everything else is decided here, not
-// by the code under test: which shapes are valid (shapes.h's rule, written out again below
-// rather than calling boxtree::is_valid) and how an infinite box side is read.
+// Reference answers by exhaustive search: every facet, every node, every facet pair. The
+// overlap geometry is decided here, not by the code under test: reference_geometry.h's own
+// triangle tests (sharing no predicate with geometry.h), shapes.h's validity rule written out
+// again below rather than calling boxtree::is_valid, and how an infinite box side is read. Rays
+// still use the library's watertight ray/triangle test (geometry.h), because the callers compare
+// hit distances bit for bit; that test is checked against an independent linear solve in
+// tests/test_geometry.cpp.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <vector>
 
 #include "boxtree/collide.h"
-#include "boxtree/geometry.h"
+#include "boxtree/geometry.h"  // intersect_ray_triangle only
 #include "boxtree/query.h"
+#include "support/reference_geometry.h"
 
 namespace boxtree::test {
 
@@ -60,15 +63,20 @@ bool triangle_overlaps_shape(const Vec3& a, const Vec3& b, const Vec3& c, const 
   if (!reference_valid(s)) return false;
   if constexpr (std::is_same_v<Shape, Aabb>) {
     // A box with infinite sides meets the triangle iff its part within the triangle's bounds
-    // does; that part is finite. (Finite boxes are passed as they are: the same rounding.)
-    if (s.min.allFinite() && s.max.allFinite()) return triangle_overlaps_aabb(a, b, c, s);
-    const Aabb bounds = Aabb::from_triangle(a, b, c);
-    const Aabb clipped{s.min.cwiseMax(bounds.min), s.max.cwiseMin(bounds.max)};
-    return reference_valid(clipped) && triangle_overlaps_aabb(a, b, c, clipped);
+    // does; that part is finite.
+    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    const Vec3 clipped_lo = s.min.cwiseMax(lo), clipped_hi = s.max.cwiseMin(hi);
+    if (!(clipped_lo.array() <= clipped_hi.array()).all()) return false;
+    const bool finite = s.min.allFinite() && s.max.allFinite();
+    return finite ? reference::triangle_meets_aabb(a, b, c, s.min, s.max)
+                  : reference::triangle_meets_aabb(a, b, c, clipped_lo, clipped_hi);
   }
-  if constexpr (std::is_same_v<Shape, Obb>) return triangle_overlaps_obb(a, b, c, s);
-  if constexpr (std::is_same_v<Shape, Sphere>) return triangle_overlaps_sphere(a, b, c, s);
-  if constexpr (std::is_same_v<Shape, Capsule>) return triangle_overlaps_capsule(a, b, c, s);
+  if constexpr (std::is_same_v<Shape, Obb>)
+    return reference::triangle_meets_obb(a, b, c, s.center, s.axes, s.half_extents);
+  if constexpr (std::is_same_v<Shape, Sphere>)
+    return reference::point_triangle_distance2(s.center, a, b, c) <= s.radius * s.radius;
+  if constexpr (std::is_same_v<Shape, Capsule>)
+    return reference::segment_triangle_distance2(s.p0, s.p1, a, b, c) <= s.radius * s.radius;
 }
 
 template <class Shape>
@@ -99,16 +107,21 @@ inline std::vector<FacetPair> brute_collide(const TriangleMesh& a, const Triangl
                                             const RigidTransform& a_from_b) {
   std::vector<Vec3> moved(b.vertices.size());
   for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = a_from_b.apply(b.vertices[i]);
+  const auto corners = [](const Vec3& p, const Vec3& q, const Vec3& r) { return std::array<Vec3, 3>{p, q, r}; };
+  const auto apart = [](const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t) {
+    // Disjoint bounding boxes (compared exactly) mean disjoint triangles; this keeps it fast.
+    for (int k = 0; k < 3; ++k) {
+      if (std::max({s[0][k], s[1][k], s[2][k]}) < std::min({t[0][k], t[1][k], t[2][k]})) return true;
+      if (std::max({t[0][k], t[1][k], t[2][k]}) < std::min({s[0][k], s[1][k], s[2][k]})) return true;
+    }
+    return false;
+  };
   std::vector<FacetPair> out;
   for (FacetId fb = 0; fb < b.facet_count(); ++fb) {
-    const Vec3& q0 = moved[b.triangles[fb][0]];
-    const Vec3& q1 = moved[b.triangles[fb][1]];
-    const Vec3& q2 = moved[b.triangles[fb][2]];
-    const Aabb box_b = Aabb::from_triangle(q0, q1, q2);
+    const auto q = corners(moved[b.triangles[fb][0]], moved[b.triangles[fb][1]], moved[b.triangles[fb][2]]);
     for (FacetId fa = 0; fa < a.facet_count(); ++fa) {
-      // The box pre-check is exact (disjoint boxes => disjoint triangles) and keeps this fast.
-      if (!overlaps(Aabb::from_triangle(a.corner(fa, 0), a.corner(fa, 1), a.corner(fa, 2)), box_b)) continue;
-      if (triangles_intersect(a.corner(fa, 0), a.corner(fa, 1), a.corner(fa, 2), q0, q1, q2)) out.push_back({fa, fb});
+      const auto p = corners(a.corner(fa, 0), a.corner(fa, 1), a.corner(fa, 2));
+      if (!apart(p, q) && reference::triangles_meet(p, q)) out.push_back({fa, fb});
     }
   }
   std::sort(out.begin(), out.end());
