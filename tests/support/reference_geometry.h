@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "boxtree/shapes.h"
@@ -219,6 +220,13 @@ inline bool triangle_meets_aabb(const Vec3& a, const Vec3& b, const Vec3& c, con
 // Valid oriented box: centre, axes (columns), half extents.
 inline bool triangle_meets_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& center, const Mat3& axes,
                                const Vec3& half) {
+  // Far apart along a box axis (by more than 1e-9 of the sizes involved, far above the rounding of
+  // these projections): no need for the exact test. Only for speed.
+  for (int i = 0; i < 3; ++i) {
+    const Real pa = axes.col(i).dot(a - center), pb = axes.col(i).dot(b - center), pc = axes.col(i).dot(c - center);
+    const Real margin = 1e-9 * (half[i] + std::max({std::abs(pa), std::abs(pb), std::abs(pc)}));
+    if (std::min({pa, pb, pc}) > half[i] + margin || std::max({pa, pb, pc}) < -half[i] - margin) return false;
+  }
   BoxCorners box;
   for (int k = 0; k < 8; ++k) {
     Vec3 p = center;
@@ -285,6 +293,55 @@ inline Real segment_triangle_distance2(const Vec3& p, const Vec3& q, const Vec3&
   return std::min({point_triangle_distance2(p, a, b, c), point_triangle_distance2(q, a, b, c),
                    segment_segment_distance2(p, q, a, b), segment_segment_distance2(p, q, b, c),
                    segment_segment_distance2(p, q, c, a)});
+}
+
+// How deep two closed triangles interpenetrate: the least distance one must move to come apart,
+// 0 if they are apart or merely touch, and 0 for coplanar ones (flat sets part along their common
+// normal). By the separating-axis theorem, the least overlap of their shadows on the face normals
+// of their Minkowski difference: the triangles' normals and the cross products of an edge of each.
+// Rounded, and an axis from two edges (or a normal from a corner's two edges) within 1e-8 rad of
+// parallel is left out, its direction being rounding noise: the result can be off by about 1e-8 of
+// the triangles' size, so callers compare it with a margin above that.
+inline Real penetration_depth(const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t) {
+  constexpr Real kParallel = 1e-8;
+  std::array<Vec3, 3> es, et;
+  for (int i = 0; i < 3; ++i) {
+    es[i] = s[(i + 1) % 3] - s[i];
+    et[i] = t[(i + 1) % 3] - t[i];
+  }
+  Real depth = std::numeric_limits<Real>::infinity();
+  bool any_axis = false;
+  const auto try_axis = [&](const Vec3& x, const Vec3& y) {
+    const Vec3 axis = x.cross(y);
+    const Real length = axis.norm();
+    if (!(length > kParallel * x.norm() * y.norm())) return;
+    Real s_lo = axis.dot(s[0]), s_hi = s_lo, t_lo = axis.dot(t[0]), t_hi = t_lo;
+    for (int i = 1; i < 3; ++i) {
+      s_lo = std::min(s_lo, axis.dot(s[i]));
+      s_hi = std::max(s_hi, axis.dot(s[i]));
+      t_lo = std::min(t_lo, axis.dot(t[i]));
+      t_hi = std::max(t_hi, axis.dot(t[i]));
+    }
+    depth = std::min(depth, std::min(s_hi - t_lo, t_hi - s_lo) / length);
+    any_axis = true;
+  };
+  try_axis(es[0], es[1]);
+  try_axis(et[0], et[1]);
+  for (const Vec3& x : es)
+    for (const Vec3& y : et) try_axis(x, y);
+  return any_axis ? std::max(depth, Real(0)) : Real(0);
+}
+
+// Squared distance between two closed triangles (0 when they meet): when they do not, a closest
+// pair has a point on an edge of one of them (two interior points could only be closest across
+// parallel planes, where sliding reaches an edge).
+inline Real triangle_triangle_distance2(const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t) {
+  Real best = std::numeric_limits<Real>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    best = std::min(best, segment_triangle_distance2(s[i], s[(i + 1) % 3], t[0], t[1], t[2]));
+    best = std::min(best, segment_triangle_distance2(t[i], t[(i + 1) % 3], s[0], s[1], s[2]));
+  }
+  return best;
 }
 
 }  // namespace boxtree::test::reference
