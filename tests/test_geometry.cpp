@@ -629,19 +629,19 @@ TEST(GeometryTriangleTriangle, TouchingIsExactForAnyCoordinates) {
     }
   };
   for (int i = 0; i < scaled(4000); ++i) {
-    const Vec3 offset = rng.uniform_vec3(-1e3, 1e3);
-    const std::array<Vec3, 3> p = {offset + rng.uniform_vec3(-1, 1), offset + rng.uniform_vec3(-1, 1),
-                                   offset + rng.uniform_vec3(-1, 1)};
+    const Vec3 offset = rng.point(-1e3, 1e3);
+    const std::array<Vec3, 3> p = {offset + rng.point(-1, 1), offset + rng.point(-1, 1),
+                                   offset + rng.point(-1, 1)};
     // Sharing one corner or one edge, folded to any side.
-    std::array<Vec3, 3> q = {p[i % 3], offset + rng.uniform_vec3(-1, 1), offset + rng.uniform_vec3(-1, 1)};
+    std::array<Vec3, 3> q = {p[i % 3], offset + rng.point(-1, 1), offset + rng.point(-1, 1)};
     if (i % 2) q[1] = p[(i + 1) % 3];
     expect(p, q, true);
     ++shared;
     // A corner on p's plane (rounded): the oracle decides.
     const Real s = rng.uniform(-0.5, 1), t = rng.uniform(-0.5, 1);
     q[0] = p[0] + s * (p[1] - p[0]) + t * (p[2] - p[0]);
-    q[1] = q[0] + rng.uniform_vec3(0.1, 1);
-    q[2] = q[0] + rng.uniform_vec3(0.1, 1).cwiseProduct(Vec3(1, 1, -1));
+    q[1] = q[0] + rng.point(0.1, 1);
+    q[2] = q[0] + rng.point(0.1, 1).cwiseProduct(Vec3(1, 1, -1));
     const bool meets = reference::triangles_meet(p, q);
     expect(p, q, meets);
     ++near_plane;

@@ -109,17 +109,27 @@ inline int orient3d_sign(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
 
 // orient3d_sign(a, b, c, d) for many d against one plane: the normal and the magnitudes of its
 // products (for the error bound) are computed once.
+// Holds references to the three corners: it lives within the caller's use of them.
 struct PlaneSide {
-  Vec3 a, b, c;
+  const Vec3& a;
+  const Vec3& b;
+  const Vec3& c;
   Vec3 normal, magnitude;  // (b - a) x (c - a) as orient3d_sign rounds it; |l| + |r| per component
   PlaneSide(const Vec3& a_, const Vec3& b_, const Vec3& c_) : a(a_), b(b_), c(c_) {
     const Vec3 u = b - a, v = c - a;
-    for (int k = 0; k < 3; ++k) {
-      const int i = (k + 1) % 3, j = (k + 2) % 3;
-      const Real l = u[i] * v[j], r = u[j] * v[i];
-      normal[k] = l - r;
-      magnitude[k] = std::abs(l) + std::abs(r);
-    }
+    // Component k: l - r with l = u_i v_j, r = u_j v_i (i = k + 1, j = k + 2), as whole vectors.
+    const Vec3 l(u.y() * v.z(), u.z() * v.x(), u.x() * v.y());
+    const Vec3 r(u.z() * v.y(), u.x() * v.z(), u.y() * v.x());
+    normal = l - r;
+    magnitude = l.cwiseAbs() + r.cwiseAbs();
+  }
+  // An axis along which the triangle abc is certainly seen with non-zero area (a component of
+  // the normal beyond its rounding bound, as orient2d_sign decides it), or -1 when none is certain:
+  // then the triangle may be degenerate, which only the exact orient2d signs can tell.
+  int certain_axis() const {
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(normal[k]) > 1e-15 * magnitude[k]) return k;
+    return -1;
   }
   int operator()(const Vec3& d) const {
     const Vec3 w = d - a;

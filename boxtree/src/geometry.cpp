@@ -324,15 +324,32 @@ bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a
 // ---------------------------------------------------------------------------------------------
 // Triangle / triangle
 
-bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                         const Vec3& b2) {
-  // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
-  // pairs of a tree walk end here.
-  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
-  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
-  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
-  const bool a_flat = is_flat(a0, a1, a2);
-  const bool b_flat = is_flat(b0, b1, b2);
+namespace {
+
+// triangles_intersect on exact signs throughout, for the pairs whose rounded signs cannot decide
+// (touching, coplanar, degenerate, or within rounding of those); the bounding boxes are already
+// known to meet.
+bool triangles_intersect_exact(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                               const Vec3& b2) {
+  // Guigue & Devillers, "Fast and Robust Triangle-Triangle Overlap Test Using Orientation
+  // Predicates", JGT 8(1), 2003, on exact signs (exact_sign.h), so that touching and coplanar
+  // pairs are decided right whatever the coordinates: a shared corner or edge of two facets of
+  // one mesh is always found. First: sides of b's corners w.r.t. a's plane, which most candidate
+  // pairs that pass the boxes end on (all on one side); degeneracy is decided exactly only where
+  // the rounded normal cannot (certain_axis).
+  const Vec3 a[3] = {a0, a1, a2};
+  const Vec3 b[3] = {b0, b1, b2};
+  const detail::PlaneSide plane_a(a0, a1, a2);
+  const bool a_flat = plane_a.certain_axis() < 0 && is_flat(a0, a1, a2);
+  int side_b[3] = {0, 0, 0};  // orient3d(a0, a1, a2, b_i)
+  if (!a_flat) {
+    for (int i = 0; i < 3; ++i) side_b[i] = plane_a(b[i]);
+    if ((side_b[0] > 0 && side_b[1] > 0 && side_b[2] > 0) || (side_b[0] < 0 && side_b[1] < 0 && side_b[2] < 0)) {
+      return false;
+    }
+  }
+  const detail::PlaneSide plane_b(b0, b1, b2);
+  const bool b_flat = plane_b.certain_axis() < 0 && is_flat(b0, b1, b2);
   if (a_flat || b_flat) {
     // A degenerate triangle is the segment (or point) between its extreme corners.
     if (a_flat && b_flat) {
@@ -347,22 +364,10 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
     const auto [s, e] = degenerate_extent(b0, b1, b2);
     return segment_meets_triangle(s, e, a0, a1, a2);
   }
-
-  // Guigue & Devillers, "Fast and Robust Triangle-Triangle Overlap Test Using Orientation
-  // Predicates", JGT 8(1), 2003, on exact signs (exact_sign.h), so that touching and coplanar
-  // pairs are decided right whatever the coordinates: a shared corner or edge of two facets of
-  // one mesh is always found. First: sides of each triangle's corners w.r.t. the other plane.
-  const Vec3 a[3] = {a0, a1, a2};
-  const Vec3 b[3] = {b0, b1, b2};
-  const detail::PlaneSide plane_a(a0, a1, a2), plane_b(b0, b1, b2);
-  int side_b[3];  // orient3d(a0, a1, a2, b_i)
-  int side_a[3];  // orient3d(b0, b1, b2, a_i)
-  for (int i = 0; i < 3; ++i) side_b[i] = plane_a(b[i]);
-  if ((side_b[0] > 0 && side_b[1] > 0 && side_b[2] > 0) || (side_b[0] < 0 && side_b[1] < 0 && side_b[2] < 0)) {
-    return false;
-  }
+  int side_a[3];                                             // orient3d(b0, b1, b2, a_i)
   if (side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0) {  // coplanar: seen along an axis that keeps a's area
-    return triangles_intersect_2d(a, b, projection_axis(a0, a1, a2));
+    const int axis = plane_a.certain_axis();
+    return triangles_intersect_2d(a, b, axis >= 0 ? axis : projection_axis(a0, a1, a2));
   }
   for (int i = 0; i < 3; ++i) side_a[i] = plane_b(a[i]);
   if ((side_a[0] > 0 && side_a[1] > 0 && side_a[2] > 0) || (side_a[0] < 0 && side_a[1] < 0 && side_a[2] < 0)) {
@@ -403,6 +408,57 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   // ordered consistently along the common line; they overlap iff each starts before the other
   // ends, and each of those comparisons is one orientation sign (G&D, Sec. 3).
   return orient3d_sign(p[0], p[1], q[0], q[1]) <= 0 && orient3d_sign(p[0], p[2], q[2], q[0]) <= 0;
+}
+
+}  // namespace
+
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
+  // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
+  // pairs of a tree walk end here.
+  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
+  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
+  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
+  // Guigue & Devillers (below) on rounded signs, each of which is used only where it is farther
+  // from zero than a bound on its rounding error (exact_sign.h's first-stage bound, taken once per
+  // plane over the other triangle's bounding box): then every sign is the exact one, none is zero
+  // (no touching, coplanar or degenerate case), and the answer is triangles_intersect_exact's.
+  // Any sign within its bound hands the pair to triangles_intersect_exact.
+  // A degenerate triangle's rounded normal is within its bound, so its plane decides no side:
+  // such pairs go to the exact test without a check of their own.
+  const Vec3* const a[3] = {&a0, &a1, &a2};
+  const Vec3* const b[3] = {&b0, &b1, &b2};
+  const auto sides = [](const detail::PlaneSide& plane, const Vec3& lo, const Vec3& hi, const Vec3* const(&points)[3],
+                        int(&side)[3]) {
+    // |d - a| per axis over the box of the points, times the normal's product magnitudes.
+    const Vec3 reach = (hi - plane.a).cwiseAbs().cwiseMax((lo - plane.a).cwiseAbs());
+    const Real bound = 1e-15 * reach.dot(plane.magnitude);
+    for (int i = 0; i < 3; ++i) {
+      const Real det = plane.normal.dot(*points[i] - plane.a);
+      if (!(std::abs(det) > bound)) return false;
+      side[i] = det > 0 ? 1 : -1;
+    }
+    return true;
+  };
+  int side_b[3];  // orient3d(a0, a1, a2, b_i)
+  int side_a[3];  // orient3d(b0, b1, b2, a_i)
+  const detail::PlaneSide plane_a(a0, a1, a2);
+  if (!sides(plane_a, b_lo, b_hi, b, side_b)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (side_b[0] == side_b[1] && side_b[1] == side_b[2]) return false;
+  const detail::PlaneSide plane_b(b0, b1, b2);
+  if (!sides(plane_b, a_lo, a_hi, a, side_a)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (side_a[0] == side_a[1] && side_a[1] == side_a[2]) return false;
+  // Each triangle straddles the other's plane: the pivot is the corner alone on its side.
+  const auto pivot = [](const int(&side)[3]) { return side[0] == side[1] ? 2 : (side[0] == side[2] ? 1 : 0); };
+  const int ia = pivot(side_a), ib = pivot(side_b);
+  const Vec3* p[3] = {a[ia], a[(ia + 1) % 3], a[(ia + 2) % 3]};
+  const Vec3* q[3] = {b[ib], b[(ib + 1) % 3], b[(ib + 2) % 3]};
+  if (side_a[ia] < 0) std::swap(q[1], q[2]);
+  if (side_b[ib] < 0) std::swap(p[1], p[2]);
+  if (detail::orient3d_sign(*p[0], *p[1], *q[0], *q[1]) > 0) return false;
+  if (detail::orient3d_sign(*p[0], *p[2], *q[2], *q[0]) > 0) return false;
+  // A zero here is a touching end of the two intervals: decided exactly, as a meeting.
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------------
