@@ -37,17 +37,17 @@ void check_pair(const TriangleMesh& mesh_a, const TriangleMesh& mesh_b, int pose
     const RigidTransform a_from_b = i == 0 ? RigidTransform::identity() : random_motion(r, translation);
     QueryStats stats;
     const std::vector<FacetPair> got = collide(a, b, a_from_b, &stats);
-    const std::vector<FacetPair> expected = test::brute_collide(mesh_a, mesh_b, a_from_b);
-    ASSERT_EQ(got, expected) << name << " pose " << i;
+    const test::Expected<FacetPair> expected = test::brute_collide(mesh_a, mesh_b, a_from_b);
+    ASSERT_EQ(test::violations(got, expected), "") << name << " pose " << i;
     EXPECT_EQ(stats.leaf_tests >= got.size(), true);
     sum += got.size();
 
     CollideSettings first;
     first.stop_at_first = true;
     const std::vector<FacetPair> one = collide(a, b, a_from_b, nullptr, first);
-    EXPECT_EQ(one.size(), expected.empty() ? 0u : 1u) << name;
+    EXPECT_EQ(one.size(), got.empty() ? 0u : 1u) << name;
     if (!one.empty()) {
-      EXPECT_TRUE(std::binary_search(expected.begin(), expected.end(), one.front()));
+      EXPECT_TRUE(std::binary_search(expected.may.begin(), expected.may.end(), one.front()));
     }
   }
   if (total_pairs) *total_pairs = sum;
@@ -64,12 +64,15 @@ TEST(Collide, MatchesBruteForceOnProceduralMeshes) {
 }
 
 // The same mesh against itself at the identity: every facet touches itself and its neighbours,
-// the densest touching/coplanar case there is.
+// the densest touching/coplanar case there is. At the identity brute force gives the exact answer
+// (must == may), which triangles_intersect promises: its coordinates are not dyadic, and before its
+// signs were exact it missed 580 of these 3370 pairs.
 TEST(Collide, SelfContactIsExact) {
   const TriangleMesh mesh = make_terrain(12, 12, 2, 10, 2);
   const Tree<Aabb> tree = build_tree<Aabb>(mesh);
   const std::vector<FacetPair> got = collide(tree, tree, RigidTransform::identity());
-  EXPECT_EQ(got, test::brute_collide(mesh, mesh, RigidTransform::identity()));
+  const test::Expected<FacetPair> expected = test::brute_collide(mesh, mesh, RigidTransform::identity());
+  EXPECT_EQ(test::violations(got, expected), "");
   for (FacetId f = 0; f < mesh.facet_count(); ++f)
     EXPECT_TRUE(std::binary_search(got.begin(), got.end(), FacetPair{f, f}));
 }

@@ -124,7 +124,7 @@ void expect_same_answers(const Tree<V>& tree, const PackedPrismTree& packed, int
     const QueryShapes q = random_query_shapes(r, box, i);
     const auto same = [&](const auto& shape, const char* what) {
       const std::vector<FacetId> got = query_overlap(packed, shape);
-      EXPECT_EQ(got, brute_overlap(mesh, shape)) << name << " " << what << " " << i;
+      EXPECT_EQ(violations(got, brute_overlap(mesh, shape)), "") << name << " " << what << " " << i;
       EXPECT_EQ(got, query_overlap(tree, shape)) << name << " " << what << " " << i;
       EXPECT_EQ(query_overlap(packed, shape, nullptr, FacetTest::leaf_volume),
                 query_overlap(tree, shape, nullptr, FacetTest::leaf_volume))
@@ -136,7 +136,7 @@ void expect_same_answers(const Tree<V>& tree, const PackedPrismTree& packed, int
     Plane plane{i % 8 == 0 ? Vec3(Vec3::Unit(i % 3)) : r.unit_vector(), 0};
     plane.offset = plane.normal.dot(random_point_near(r, box, 0.05));
     const std::vector<FacetId> cut = query_plane(packed, plane);
-    EXPECT_EQ(cut, brute_plane(mesh, plane)) << name << " plane " << i;
+    EXPECT_EQ(violations(cut, brute_plane(mesh, plane)), "") << name << " plane " << i;
     EXPECT_EQ(cut, query_plane(tree, plane)) << name << " plane " << i;
   }
   if (mesh.facet_count() > 10) {
@@ -283,7 +283,7 @@ TEST(PackedPrismTree, AnyTreeHoldsThePackedFormForPieMethods) {
       return true;
     });
     std::sort(got.begin(), got.end());
-    EXPECT_EQ(got, brute_overlap(*mesh, s)) << name;
+    EXPECT_EQ(violations(got, brute_overlap(*mesh, s)), "") << name;
     EXPECT_FALSE(got.empty()) << name;
     const Ray ray{Vec3(3, 0.1, 0.2), Vec3(-1, 0, 0)};
     const auto hit = any.ray_closest_hit(ray);
@@ -298,7 +298,7 @@ TEST(PackedPrismTree, AnyTreeHoldsThePackedFormForPieMethods) {
       return true;
     });
     std::sort(pairs.begin(), pairs.end());
-    EXPECT_EQ(pairs, brute_collide(*mesh, *other, RigidTransform{})) << name;
+    EXPECT_EQ(violations(pairs, brute_collide(*mesh, *other, RigidTransform{})), "") << name;
     EXPECT_FALSE(pairs.empty()) << name;
   }
   const AnyTree max = AnyTree::build(mesh, parse_method("pie-max"));

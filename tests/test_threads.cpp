@@ -139,8 +139,8 @@ TEST(Threads, EightThreadsOnOneTreeGiveTheSingleThreadedAnswers) {
       for (std::size_t i = 0; i < in.size(); ++i) expected[i] = answers(tree, other, in, i);
       // The reference itself is right: a sample against brute force.
       for (std::size_t i = 0; i < in.size(); i += 8) {
-        EXPECT_EQ(query_overlap(tree, in.spheres[i]), brute_overlap(mesh, in.spheres[i]));
-        EXPECT_EQ(collide(tree, other, in.motions[i]), brute_collide(mesh, other_mesh, in.motions[i]));
+        EXPECT_EQ(violations(query_overlap(tree, in.spheres[i]), brute_overlap(mesh, in.spheres[i])), "");
+        EXPECT_EQ(violations(collide(tree, other, in.motions[i]), brute_collide(mesh, other_mesh, in.motions[i])), "");
       }
       std::vector<std::vector<std::vector<std::uint64_t>>> got(kThreads,
                                                                std::vector<std::vector<std::uint64_t>>(in.size()));

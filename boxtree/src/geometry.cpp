@@ -5,15 +5,18 @@
 // Conventions shared by everything below:
 //  * Every test is closed: touching counts as overlapping.
 //  * Predicates are signs of small polynomials in coordinate differences (orientation
-//    determinants), never comparisons of divided quantities. They are therefore exact whenever
-//    those polynomials are computed exactly — e.g. for small-integer or dyadic coordinates, which
-//    is where touching and coplanar configurations really occur (grids, CAD meshes), and what the
-//    tests use to check the touching cases exactly.
-//  * A triangle whose cross product (b - a) x (c - a) is exactly zero is degenerate and is treated
-//    as the segment or point it is (except by the ray test, which never hits it).
+//    determinants), never comparisons of divided quantities. The triangle/triangle and
+//    segment/triangle tests (triangles_intersect, and the capsule test's "do they meet") take
+//    those signs exactly (exact_sign.h), for any coordinates: facets sharing a corner or an edge
+//    always meet. The box, sphere and capsule tests round (centres, half extents, distances):
+//    they are exact whenever their polynomials are computed exactly, e.g. for small-integer or
+//    dyadic coordinates, which is what the tests use to check their touching cases exactly.
+//  * A triangle whose corners are on one line (exactly) is degenerate and is treated as the
+//    segment or point it is (except by the ray test, which never hits it).
 //  * No heap allocation and no exceptions: these run in the inner loops of every query.
 #include "boxtree/geometry.h"
 
+#include "exact_sign.h"
 #include "internal.h"
 
 #include <algorithm>
@@ -28,140 +31,103 @@ namespace {
 
 bool is_zero(const Vec3& v) { return v.x() == 0 && v.y() == 0 && v.z() == 0; }
 
-// ((b - a) x (c - a)) . (d - a): positive when d lies on the side of the plane (a, b, c) that the
-// normal (b - a) x (c - a) points to, zero when the four points are coplanar.
-Real orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
+using detail::orient2d_sign;
+using detail::orient3d_sign;
 
-// Twice the signed area of the 2D triangle (a, b, c): positive when counter-clockwise.
-Real orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
-  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
-}
-
-bool strictly_same_sign(Real x, Real y) { return (x > 0 && y > 0) || (x < 0 && y < 0); }
 bool mixed_signs(Real x, Real y, Real z) { return (x < 0 || y < 0 || z < 0) && (x > 0 || y > 0 || z > 0); }
+bool mixed_signs(int x, int y, int z) { return (x < 0 || y < 0 || z < 0) && (x > 0 || y > 0 || z > 0); }
 
-// Projection onto the coordinate plane that drops the axis where `normal` is largest. A triangle
-// with that normal keeps a non-zero projected area: its doubled signed area becomes n_k, computed
-// by the very same products (the kept axes are cyclic after k), so it is non-zero whenever n is.
-struct Projection {
-  int i;
-  int j;
-  Vec2 operator()(const Vec3& p) const { return {p[i], p[j]}; }
-};
-
-Projection dominant_projection(const Vec3& normal) {
-  const Vec3 m = normal.cwiseAbs();
-  const int k = m.x() >= m.y() ? (m.x() >= m.z() ? 0 : 2) : (m.y() >= m.z() ? 1 : 2);
-  return {(k + 1) % 3, (k + 2) % 3};
+// The axis along which the triangle abc is seen with non-zero area (exactly), or -1 if its
+// corners are on one line. A plane seen along that axis maps one-to-one onto the other two, so
+// 2D tests there decide coplanar configurations.
+int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
+  for (int drop = 0; drop < 3; ++drop)
+    if (orient2d_sign(a, b, c, drop) != 0) return drop;
+  return -1;
 }
 
-// Closed 2D segment intersection from four orientation signs; a zero-length segment is fine (its
-// two orientations are equal, so it is either rejected or falls into the collinear case).
-bool segments_intersect_2d(const Vec2& p, const Vec2& q, const Vec2& r, const Vec2& s) {
-  const Real o1 = orient2d(p, q, r);
-  const Real o2 = orient2d(p, q, s);
-  if (strictly_same_sign(o1, o2)) return false;
-  const Real o3 = orient2d(r, s, p);
-  const Real o4 = orient2d(r, s, q);
-  if (strictly_same_sign(o3, o4)) return false;
+// Closed 2D segment intersection seen along `drop`; a zero-length segment is fine (its two
+// orientations are equal, so it is either rejected or falls into the collinear case).
+bool segments_intersect_2d(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, int drop) {
+  const int o1 = orient2d_sign(p, q, r, drop), o2 = orient2d_sign(p, q, s, drop);
+  if (o1 * o2 > 0) return false;
+  const int o3 = orient2d_sign(r, s, p, drop), o4 = orient2d_sign(r, s, q, drop);
+  if (o3 * o4 > 0) return false;
   if ((o1 == 0 && o2 == 0) || (o3 == 0 && o4 == 0)) {
-    // All four points on one line: the segments meet iff their bounding boxes do.
-    return std::max(std::min(p.x(), q.x()), std::min(r.x(), s.x())) <=
-               std::min(std::max(p.x(), q.x()), std::max(r.x(), s.x())) &&
-           std::max(std::min(p.y(), q.y()), std::min(r.y(), s.y())) <=
-               std::min(std::max(p.y(), q.y()), std::max(r.y(), s.y()));
+    // All four points on one line: the segments meet iff their bounding boxes do (on the two
+    // coordinates seen).
+    for (const int k : {(drop + 1) % 3, (drop + 2) % 3}) {
+      if (std::max(p[k], q[k]) < std::min(r[k], s[k]) || std::max(r[k], s[k]) < std::min(p[k], q[k])) return false;
+    }
   }
   return true;
 }
 
-// Closed point-in-triangle for either winding. A projected triangle of zero area contains nothing
-// here; callers also test its edges, which is where such a point would be.
-bool point_in_triangle_2d(const Vec2& x, const Vec2& a, const Vec2& b, const Vec2& c) {
-  if (orient2d(a, b, c) == 0) return false;
-  return !mixed_signs(orient2d(a, b, x), orient2d(b, c, x), orient2d(c, a, x));
+// Closed point-in-triangle seen along `drop`, for either winding. A triangle of zero seen area
+// contains nothing here; callers also test its edges, which is where such a point would be.
+bool point_in_triangle_2d(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c, int drop) {
+  if (orient2d_sign(a, b, c, drop) == 0) return false;
+  return !mixed_signs(orient2d_sign(a, b, x, drop), orient2d_sign(b, c, x, drop), orient2d_sign(c, a, x, drop));
 }
 
-bool segment_meets_triangle_2d(const Vec2& s, const Vec2& e, const Vec2& a, const Vec2& b, const Vec2& c) {
-  return point_in_triangle_2d(s, a, b, c) || point_in_triangle_2d(e, a, b, c) || segments_intersect_2d(s, e, a, b) ||
-         segments_intersect_2d(s, e, b, c) || segments_intersect_2d(s, e, c, a);
+bool segment_meets_triangle_2d(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c, int drop) {
+  return point_in_triangle_2d(s, a, b, c, drop) || point_in_triangle_2d(e, a, b, c, drop) ||
+         segments_intersect_2d(s, e, a, b, drop) || segments_intersect_2d(s, e, b, c, drop) ||
+         segments_intersect_2d(s, e, c, a, drop);
 }
 
-bool triangles_intersect_2d(const Vec2 (&p)[3], const Vec2 (&q)[3]) {
+bool triangles_intersect_2d(const Vec3 (&p)[3], const Vec3 (&q)[3], int drop) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
-      if (segments_intersect_2d(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3])) return true;
+      if (segments_intersect_2d(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], drop)) return true;
     }
   }
   // No boundary crossing: they meet only if one lies inside the other.
-  return point_in_triangle_2d(p[0], q[0], q[1], q[2]) || point_in_triangle_2d(q[0], p[0], p[1], p[2]);
+  return point_in_triangle_2d(p[0], q[0], q[1], q[2], drop) || point_in_triangle_2d(q[0], p[0], p[1], p[2], drop);
 }
 
-// Closed segment [s, e] (possibly a point) against the non-degenerate triangle (a, b, c) with
-// normal n = (b - a) x (c - a). Orientation-only version of Ericson 5.3.4 (line vs triangle by
-// scalar triple products), restricted to the segment by the signs of its ends w.r.t. the plane.
-bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n) {
+// Closed segment [s, e] (possibly a point) against the triangle (a, b, c), whose corners are not
+// on one line (exactly). Orientation-only version of Ericson 5.3.4 (line vs triangle by scalar
+// triple products), restricted to the segment by the signs of its ends w.r.t. the plane.
+bool segment_meets_triangle(const Vec3& s, const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& c) {
   // A meeting point lies in both bounding boxes, so disjoint boxes (compared exactly) mean no
-  // meeting. This also decides the cases the orientation tests below cannot: a triangle so much
-  // smaller than the segment's coordinates (a ratio beyond ~1e15) that its corners vanish in
-  // the rounding of s - a, where all three orientations come out zero ("on every edge").
+  // meeting. Cheap, and the signs below need not be computed for most candidate pairs.
   const Vec3 tri_lo = a.cwiseMin(b).cwiseMin(c), tri_hi = a.cwiseMax(b).cwiseMax(c);
   if ((s.cwiseMax(e).array() < tri_lo.array()).any() || (s.cwiseMin(e).array() > tri_hi.array()).any()) return false;
-  const Real os = n.dot(s - a);
-  const Real oe = n.dot(e - a);
-  if (strictly_same_sign(os, oe)) return false;
+  const int os = orient3d_sign(a, b, c, s);
+  const int oe = orient3d_sign(a, b, c, e);
+  if (os * oe > 0) return false;
   if (os == 0 && oe == 0) {
-    const Projection proj = dominant_projection(n);
-    return segment_meets_triangle_2d(proj(s), proj(e), proj(a), proj(b), proj(c));
+    const int drop = projection_axis(a, b, c);
+    return drop >= 0 && segment_meets_triangle_2d(s, e, a, b, c, drop);
   }
   // The line crosses the plane at a single point, which lies on the segment. It is in the closed
   // triangle iff the line passes on the same side of (or through) all three directed edges.
-  return !mixed_signs(orient3d(s, e, a, b), orient3d(s, e, b, c), orient3d(s, e, c, a));
+  return !mixed_signs(orient3d_sign(s, e, a, b), orient3d_sign(s, e, b, c), orient3d_sign(s, e, c, a));
 }
 
-// x on the closed segment [a, b], a != b.
-bool point_on_segment(const Vec3& x, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a;
-  const Vec3 ax = x - a;
-  if (!is_zero(ab.cross(ax))) return false;
-  const Real t = ax.dot(ab);
-  return t >= 0 && t <= ab.squaredNorm();
-}
-
-// Closed 3D segment intersection, either segment possibly a point.
+// Closed 3D segment intersection, either segment possibly a point. Segments in one plane meet iff
+// they are seen to meet along all three axes: along one of them their plane is seen one-to-one.
 bool segments_meet(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
-  const Vec3 d = p1 - p0;
-  const Vec3 e = q1 - q0;
-  const Vec3 w = q0 - p0;
-  const Vec3 n = d.cross(e);
-  if (!is_zero(n)) {
-    if (w.dot(n) != 0) return false;  // skew lines
-    // p0 + s d = q0 + t e with s = ((w x e).n) / n.n and t = ((w x d).n) / n.n (Cramer).
-    const Real nn = n.squaredNorm();
-    const Real s = w.cross(e).dot(n);
-    const Real t = w.cross(d).dot(n);
-    return s >= 0 && s <= nn && t >= 0 && t <= nn;
-  }
-  const bool d_zero = is_zero(d);
-  const bool e_zero = is_zero(e);
-  if (d_zero && e_zero) return is_zero(w);
-  if (d_zero) return point_on_segment(p0, q0, q1);
-  if (e_zero) return point_on_segment(q0, p0, p1);
-  // Parallel: they meet iff collinear and their projections on d overlap.
-  if (!is_zero(w.cross(d))) return false;
-  const Real b0 = w.dot(d);
-  const Real b1 = (q1 - p0).dot(d);
-  return std::min(b0, b1) <= d.squaredNorm() && std::max(b0, b1) >= 0;
+  const Vec3 lo = p0.cwiseMin(p1).cwiseMax(q0.cwiseMin(q1)), hi = p0.cwiseMax(p1).cwiseMin(q0.cwiseMax(q1));
+  if ((lo.array() > hi.array()).any()) return false;
+  if (orient3d_sign(p0, p1, q0, q1) != 0) return false;  // skew lines
+  for (int drop = 0; drop < 3; ++drop)
+    if (!segments_intersect_2d(p0, p1, q0, q1, drop)) return false;
+  return true;
 }
 
-// The two corners of a degenerate (collinear) triangle that are farthest apart: the segment the
-// triangle is. A point when all three corners coincide.
+// True if the corners are on one line (exactly): the triangle is the segment between its
+// extreme corners.
+bool is_flat(const Vec3& a, const Vec3& b, const Vec3& c) { return projection_axis(a, b, c) < 0; }
+
+// The extreme corners of a degenerate (collinear) triangle: the least and greatest in
+// lexicographic order, which on a line are its two ends. A point when all three coincide.
 std::pair<Vec3, Vec3> degenerate_extent(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Real ab = (b - a).squaredNorm();
-  const Real bc = (c - b).squaredNorm();
-  const Real ca = (a - c).squaredNorm();
-  if (ab >= bc && ab >= ca) return {a, b};
-  if (bc >= ca) return {b, c};
-  return {c, a};
+  const auto less = [](const Vec3& x, const Vec3& y) {
+    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+  };
+  return {std::min({a, b, c}, less), std::max({a, b, c}, less)};
 }
 
 Vec3 closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
@@ -358,21 +324,34 @@ bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a
 // ---------------------------------------------------------------------------------------------
 // Triangle / triangle
 
-bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                         const Vec3& b2) {
-  // Disjoint bounding boxes (compared exactly) mean disjoint triangles. Besides being cheap, this
-  // decides cases the orientation tests below cannot resolve: corners of magnitudes 1e15 and
-  // more apart, where the small ones vanish in the rounding (e.g. a segment 1e32 long against
-  // one 1e-9 off its line).
-  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
-  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
-  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
-  const Vec3 na = (a1 - a0).cross(a2 - a0);
-  const Vec3 nb = (b1 - b0).cross(b2 - b0);
-  const bool a_flat = is_zero(na);
-  const bool b_flat = is_zero(nb);
+namespace {
+
+// triangles_intersect on exact signs throughout, for the pairs whose rounded signs cannot decide
+// (touching, coplanar, degenerate, or within rounding of those); the bounding boxes are already
+// known to meet.
+bool triangles_intersect_exact(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                               const Vec3& b2) {
+  // Guigue & Devillers, "Fast and Robust Triangle-Triangle Overlap Test Using Orientation
+  // Predicates", JGT 8(1), 2003, on exact signs (exact_sign.h), so that touching and coplanar
+  // pairs are decided right whatever the coordinates: a shared corner or edge of two facets of
+  // one mesh is always found. First: sides of b's corners w.r.t. a's plane, which most candidate
+  // pairs that pass the boxes end on (all on one side); degeneracy is decided exactly only where
+  // the rounded normal cannot (certain_axis).
+  const Vec3 a[3] = {a0, a1, a2};
+  const Vec3 b[3] = {b0, b1, b2};
+  const detail::PlaneSide plane_a(a0, a1, a2);
+  const bool a_flat = plane_a.certain_axis() < 0 && is_flat(a0, a1, a2);
+  int side_b[3] = {0, 0, 0};  // orient3d(a0, a1, a2, b_i)
+  if (!a_flat) {
+    for (int i = 0; i < 3; ++i) side_b[i] = plane_a(b[i]);
+    if ((side_b[0] > 0 && side_b[1] > 0 && side_b[2] > 0) || (side_b[0] < 0 && side_b[1] < 0 && side_b[2] < 0)) {
+      return false;
+    }
+  }
+  const detail::PlaneSide plane_b(b0, b1, b2);
+  const bool b_flat = plane_b.certain_axis() < 0 && is_flat(b0, b1, b2);
   if (a_flat || b_flat) {
-    // A degenerate triangle is the segment (or point) between its two farthest corners.
+    // A degenerate triangle is the segment (or point) between its extreme corners.
     if (a_flat && b_flat) {
       const auto [sa, ea] = degenerate_extent(a0, a1, a2);
       const auto [sb, eb] = degenerate_extent(b0, b1, b2);
@@ -380,43 +359,25 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
     }
     if (a_flat) {
       const auto [s, e] = degenerate_extent(a0, a1, a2);
-      return segment_meets_triangle(s, e, b0, b1, b2, nb);
+      return segment_meets_triangle(s, e, b0, b1, b2);
     }
     const auto [s, e] = degenerate_extent(b0, b1, b2);
-    return segment_meets_triangle(s, e, a0, a1, a2, na);
+    return segment_meets_triangle(s, e, a0, a1, a2);
   }
-
-  // Guigue & Devillers, "Fast and Robust Triangle-Triangle Overlap Test Using Orientation
-  // Predicates", JGT 8(1), 2003. First: sides of each triangle's corners w.r.t. the other plane.
-  const Vec3 a[3] = {a0, a1, a2};
-  const Vec3 b[3] = {b0, b1, b2};
-  Real side_b[3];  // orient3d(a0, a1, a2, b_i)
-  Real side_a[3];  // orient3d(b0, b1, b2, a_i)
-  for (int i = 0; i < 3; ++i) side_b[i] = na.dot(b[i] - a0);
-  if ((side_b[0] > 0 && side_b[1] > 0 && side_b[2] > 0) || (side_b[0] < 0 && side_b[1] < 0 && side_b[2] < 0)) {
+  int side_a[3];                                             // orient3d(b0, b1, b2, a_i)
+  if (side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0) {  // coplanar: seen along an axis that keeps a's area
+    const int axis = plane_a.certain_axis();
+    return triangles_intersect_2d(a, b, axis >= 0 ? axis : projection_axis(a0, a1, a2));
+  }
+  for (int i = 0; i < 3; ++i) side_a[i] = plane_b(a[i]);
+  if ((side_a[0] > 0 && side_a[1] > 0 && side_a[2] > 0) || (side_a[0] < 0 && side_a[1] < 0 && side_a[2] < 0)) {
     return false;
-  }
-  bool coplanar = side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0;
-  if (!coplanar) {
-    for (int i = 0; i < 3; ++i) side_a[i] = nb.dot(a[i] - b0);
-    if ((side_a[0] > 0 && side_a[1] > 0 && side_a[2] > 0) || (side_a[0] < 0 && side_a[1] < 0 && side_a[2] < 0)) {
-      return false;
-    }
-    // Rounding can make one triangle look coplanar with the other but not vice versa; both
-    // answers are within rounding, take the coplanar test.
-    coplanar = side_a[0] == 0 && side_a[1] == 0 && side_a[2] == 0;
-  }
-  if (coplanar) {
-    const Projection proj = dominant_projection(na);
-    const Vec2 pa[3] = {proj(a0), proj(a1), proj(a2)};
-    const Vec2 pb[3] = {proj(b0), proj(b1), proj(b2)};
-    return triangles_intersect_2d(pa, pb);
   }
 
   // Each triangle now straddles or touches the other's plane. Pick in each a pivot corner that is
   // alone on its (closed) side, so that the two edges leaving it cut the other plane at the two
   // ends of the triangle's interval on the planes' common line. sign = the pivot's side.
-  const auto pivot = [](const Real(&side)[3], int& index, int& sign) {
+  const auto pivot = [](const int(&side)[3], int& index, int& sign) {
     int positive = 0;
     int negative = 0;
     for (int i = 0; i < 3; ++i) {
@@ -446,7 +407,58 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   // The intervals [p-edge (p0,p2), p-edge (p0,p1)] and [q-edge (q0,q1), q-edge (q0,q2)] are
   // ordered consistently along the common line; they overlap iff each starts before the other
   // ends, and each of those comparisons is one orientation sign (G&D, Sec. 3).
-  return orient3d(p[0], p[1], q[0], q[1]) <= 0 && orient3d(p[0], p[2], q[2], q[0]) <= 0;
+  return orient3d_sign(p[0], p[1], q[0], q[1]) <= 0 && orient3d_sign(p[0], p[2], q[2], q[0]) <= 0;
+}
+
+}  // namespace
+
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
+  // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
+  // pairs of a tree walk end here.
+  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
+  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
+  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
+  // Guigue & Devillers (below) on rounded signs, each of which is used only where it is farther
+  // from zero than a bound on its rounding error (exact_sign.h's first-stage bound, taken once per
+  // plane over the other triangle's bounding box): then every sign is the exact one, none is zero
+  // (no touching, coplanar or degenerate case), and the answer is triangles_intersect_exact's.
+  // Any sign within its bound hands the pair to triangles_intersect_exact.
+  // A degenerate triangle's rounded normal is within its bound, so its plane decides no side:
+  // such pairs go to the exact test without a check of their own.
+  const Vec3* const a[3] = {&a0, &a1, &a2};
+  const Vec3* const b[3] = {&b0, &b1, &b2};
+  const auto sides = [](const detail::PlaneSide& plane, const Vec3& lo, const Vec3& hi, const Vec3* const(&points)[3],
+                        int(&side)[3]) {
+    // |d - a| per axis over the box of the points, times the normal's product magnitudes.
+    const Vec3 reach = (hi - plane.a).cwiseAbs().cwiseMax((lo - plane.a).cwiseAbs());
+    const Real bound = 1e-15 * reach.dot(plane.magnitude);
+    for (int i = 0; i < 3; ++i) {
+      const Real det = plane.normal.dot(*points[i] - plane.a);
+      if (!(std::abs(det) > bound)) return false;
+      side[i] = det > 0 ? 1 : -1;
+    }
+    return true;
+  };
+  int side_b[3];  // orient3d(a0, a1, a2, b_i)
+  int side_a[3];  // orient3d(b0, b1, b2, a_i)
+  const detail::PlaneSide plane_a(a0, a1, a2);
+  if (!sides(plane_a, b_lo, b_hi, b, side_b)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (side_b[0] == side_b[1] && side_b[1] == side_b[2]) return false;
+  const detail::PlaneSide plane_b(b0, b1, b2);
+  if (!sides(plane_b, a_lo, a_hi, a, side_a)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (side_a[0] == side_a[1] && side_a[1] == side_a[2]) return false;
+  // Each triangle straddles the other's plane: the pivot is the corner alone on its side.
+  const auto pivot = [](const int(&side)[3]) { return side[0] == side[1] ? 2 : (side[0] == side[2] ? 1 : 0); };
+  const int ia = pivot(side_a), ib = pivot(side_b);
+  const Vec3* p[3] = {a[ia], a[(ia + 1) % 3], a[(ia + 2) % 3]};
+  const Vec3* q[3] = {b[ib], b[(ib + 1) % 3], b[(ib + 2) % 3]};
+  if (side_a[ia] < 0) std::swap(q[1], q[2]);
+  if (side_b[ib] < 0) std::swap(p[1], p[2]);
+  if (detail::orient3d_sign(*p[0], *p[1], *q[0], *q[1]) > 0) return false;
+  if (detail::orient3d_sign(*p[0], *p[2], *q[2], *q[0]) > 0) return false;
+  // A zero here is a touching end of the two intervals: decided exactly, as a meeting.
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -641,11 +653,10 @@ Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec
   // side or a triangle edge on the other (the interior of each cannot both be closest), so the
   // distance is the least of two point/triangle and three segment/segment distances. A degenerate
   // triangle is the union of its edges, which the same minimum covers.
-  const Vec3 n = (b - a).cross(c - a);
-  if (is_zero(n)) {
+  if (is_flat(a, b, c)) {
     const auto [s, e] = degenerate_extent(a, b, c);
     if (segments_meet(p0, p1, s, e)) return 0;  // exact zero on touching, as for proper triangles
-  } else if (segment_meets_triangle(p0, p1, a, b, c, n)) {
+  } else if (segment_meets_triangle(p0, p1, a, b, c)) {
     return 0;
   }
   Real best = (closest_point_on_triangle(p0, a, b, c) - p0).squaredNorm();

@@ -121,7 +121,7 @@ template <class V, class Shape>
 void expect_overlap_matches(const Tree<V>& tree, const Shape& shape, const std::string& what) {
   QueryStats stats;
   const std::vector<FacetId> got = query_overlap(tree, shape, &stats);
-  EXPECT_EQ(got, brute_overlap(tree.mesh(), shape)) << what;
+  EXPECT_EQ(violations(got, brute_overlap(tree.mesh(), shape)), "") << what;
   EXPECT_LE(stats.volume_tests, 2 * tree.node_count());
   // Leaf-volume mode: the facets whose leaf boxes overlap the shape.
   std::vector<FacetId> expected_leaf;
@@ -177,7 +177,7 @@ void check_planes_and_stabbing(const Tree<V>& tree, int count, const std::string
   for (int i = 0; i < count; ++i) {
     Plane plane{i % 8 == 0 ? Vec3(Vec3::Unit(i % 3)) : r.unit_vector(), 0};
     plane.offset = plane.normal.dot(random_point_near(r, box, 0.05));
-    EXPECT_EQ(query_plane(tree, plane), brute_plane(mesh, plane)) << name << " plane " << i;
+    EXPECT_EQ(violations(query_plane(tree, plane), brute_plane(mesh, plane)), "") << name << " plane " << i;
     Vec3 p = i % 2 ? mesh.corner(FacetId(r.next() % mesh.facet_count()), 0) : random_point_near(r, box);
     // Brute force over all nodes: those containing p whose ancestors all contain it (parents
     // come before their children in the layout). Trees that keep children inside their parents
@@ -207,7 +207,7 @@ std::size_t check_collide(const TreeT& a, const TreeT& b, int poses, Real reach,
       t.translation = r.uniform_vec3(-reach, reach);
     }
     const std::vector<FacetPair> got = collide(a, b, t);
-    EXPECT_EQ(got, brute_collide(a.mesh(), b.mesh(), t)) << name << " pose " << pose;
+    EXPECT_EQ(violations(got, brute_collide(a.mesh(), b.mesh(), t)), "") << name << " pose " << pose;
     total += got.size();
   }
   return total;

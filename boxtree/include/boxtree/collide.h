@@ -20,7 +20,9 @@ struct CollideSettings {
 
 // Descends both trees, always splitting the node with the larger volume (surface area), tests
 // volume pairs exactly (separating axes in a's frame) and runs the exact triangle-triangle test
-// (triangles_intersect: touching counts) only at leaf pairs. `a_from_b` maps b's frame to a's;
+// (triangles_intersect: touching counts) only at leaf pairs, on a's corners and b's corners moved
+// by a_from_b.apply: exact at the identity (a mesh against itself reports every pair of facets
+// that share a corner), else exact on the rounded moved corners. `a_from_b` maps b's frame to a's;
 // its rotation must be orthonormal (checked: throws boxtree::Error if not, or if not finite).
 // `visit` returns false to stop.
 template <class Volume>

@@ -36,7 +36,11 @@ bool intersect_ray_triangle(const Ray& ray, const RayShear& shear, const Vec3& a
                             TriangleHit& hit);
 
 // Triangle/triangle intersection (closed: touching at a point counts). Handles coplanar and
-// degenerate triangles (Guigue & Devillers 2003, with coplanar and degenerate fallbacks).
+// degenerate triangles (Guigue & Devillers 2003, with coplanar and degenerate fallbacks). Exact on
+// the coordinates given, whatever they are (finite, within the 1e50 build_tree accepts): every
+// orientation sign is exact, so two facets sharing a corner or an edge always intersect, and a
+// pair reported is a pair that meets. A triangle with its corners on one line is the segment
+// between its extreme corners.
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                          const Vec3& b2);
 
