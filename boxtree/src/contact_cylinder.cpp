@@ -561,10 +561,11 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
       rim_arc_least(arc, ends[k], ends[k + 1], best, noise, [&](const Vec2& u) { consider(u.x() * a1 + u.y() * a2); });
     }
   };
-  // Quick bounds of a quarter: with x0 the cylinder's lowest point along n, the overlap along
-  // u = cos(t) n + sin(t) m is at least u . (v_j - x0) = d0 cos(t) + dj sin(t), which over the
-  // front quarter is least at an end, min(d0, dj) (unless both are negative); behind, with the
-  // highest point x1 instead, min(h, dj') (h = n . (x1 - v_j) >= 0 there).
+  // Quick bounds of a quarter: for any point x of the cylinder, the overlap along
+  // u = cos(t) n + sin(t) m is at least u . (v_j - x) = dn cos(t) + dm sin(t), which over a
+  // quarter is least at an end (unless both of its ends' values are negative). Taken with the
+  // cylinder's lowest point along n and its support along the front quarter's middle, and with
+  // its highest point and the support along the middle of the quarter behind.
   const Vec3 lowest = support_cylinder(p0, p1, radius, -tri.normal);
   const Vec3 highest = support_cylinder(p0, p1, radius, tri.normal);
   const auto quarter_bound = [](Real along_n, Real along_m) {
@@ -574,8 +575,12 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     const Vec3& m = edge_normal[j];
     const Vec3 down = tri.v[j] - lowest;
     const Vec3 up = tri.v[j] - highest;
-    const Real bounds[2] = {quarter_bound(down.dot(tri.normal), down.dot(m)),
-                            quarter_bound(-up.dot(tri.normal), up.dot(m))};
+    const Vec3 down_middle = tri.v[j] - support_cylinder(p0, p1, radius, -(tri.normal + m));
+    const Vec3 up_middle = tri.v[j] - support_cylinder(p0, p1, radius, tri.normal - m);
+    const Real bounds[2] = {std::max(quarter_bound(down.dot(tri.normal), down.dot(m)),
+                                     quarter_bound(down_middle.dot(tri.normal), down_middle.dot(m))),
+                            std::max(quarter_bound(-up.dot(tri.normal), up.dot(m)),
+                                     quarter_bound(-up_middle.dot(tri.normal), up_middle.dot(m)))};
     for (int quarter = 0; quarter < 2; ++quarter) {
       if (bounds[quarter] >= best - noise) continue;
       split_at_kink(tri.normal, m, quarter_ends[quarter], quarter_ends[quarter + 1], tri.v[j]);
