@@ -165,18 +165,203 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
   return result;
 }
 
+// Whether the triangle's face normal n is the least overlap's normal, proved by a bound rather
+// than searched for: -1 if the cylinder is apart along n (by more than `limit` below zero), 1 if n
+// is proved the least, 0 if not proved (the search decides). With x0 the cylinder's lowest point
+// along n, d0 its depth below the plane and rho >= 0 the in-plane distance from its foot
+// t = x0 + d0 n to the triangle's edges (t inside), every unit u = cos(a) n + sin(a) m (m in the
+// plane, a in [0, pi/2]) has overlap
+//   f(u) = max_T u.y - min_C u.x >= u.(t - x0) + rho sin(a) = d0 cos(a) + rho sin(a),
+// since the triangle holds the disk of radius rho about t. That is least at an end of the arc:
+// f(u) >= min(d0, rho) over the front hemisphere, so rho >= max(d0, 0) makes n the least there
+// (d0 <= 0: C and T are then |d0| apart, along n). The back hemisphere, by the same bound at the
+// highest point (height h, foot clearance rho'): f(u) >= min(h, rho'). Two-sided triangles need
+// it >= d0 (n the least over the sphere); one-sided ones need only that the two really meet
+// (d0 > 0 and the foot t inside the cylinder, or that bound >= 0), since normals behind the
+// triangle are never answers there.
+int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radius, const TriangleFrame& tri,
+                          bool one_sided, Real limit) {
+  const Vec3& n = tri.normal;
+  const Vec3 p1 = p0 + length * w;
+  const Vec3 low = support_cylinder(p0, p1, radius, -n);
+  const Real d0 = n.dot(tri.v[0] - low);
+  if (d0 < limit) return -1;
+  const auto clearance = [&](const Vec3& foot) {
+    Real least = kInf;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 wall = inward_wall(tri, i);
+      least = std::min(least, wall.dot(foot - tri.v[i]) / wall.norm());
+    }
+    return least;
+  };
+  const Vec3 foot = low + d0 * n;
+  if (!(clearance(foot) >= std::max(d0, Real(0)))) return 0;
+  if (one_sided && d0 > 0) {
+    const Real along = w.dot(foot - p0);
+    if (along >= 0 && along <= length && (foot - p0 - along * w).squaredNorm() <= radius * radius) return 1;
+  } else if (one_sided) {
+    return 1;
+  }
+  const Vec3 high = support_cylinder(p0, p1, radius, n);
+  const Real height = n.dot(high - tri.v[0]);
+  const Real back = std::min(height, clearance(high - height * n));
+  return back >= (one_sided ? Real(0) : d0) ? 1 : 0;
+}
+
+// The overlap along an arc of normals u = c a1 + s a2 (a1, a2 orthonormal) on which one corner or
+// edge v of the triangle and one rim (centre c) of the cylinder are the supports:
+//   g(u) = u . q + r sqrt(1 - (u . w)^2),  q = v - c,
+// in the frame: g(c, s) = q1 c + q2 s + r sqrt(1 - (w1 c + w2 s)^2), the support function of the
+// rim's shadow (an ellipse) moved by q, so that g(u) >= u . x(u') for the support point x(u')
+// of any other normal u' of the arc.
+struct RimArc {
+  Real q1 = 0;
+  Real q2 = 0;
+  Real w1 = 0;
+  Real w2 = 0;
+  Real radius = 0;
+
+  Real side(const Vec2& u) const {
+    const Real along = w1 * u.x() + w2 * u.y();
+    return std::sqrt(std::max(Real(0), 1 - along * along));
+  }
+  Real value(const Vec2& u) const { return q1 * u.x() + q2 * u.y() + radius * side(u); }
+  // The support point at u (the gradient of g extended homogeneously): q + r (u - (u.w) w)/side;
+  // where the shadow has a corner (side ~ 0: u is +-w, the shadow a segment), its centre q, a
+  // point of the shadow all the same (all that the bounds below need).
+  Vec2 support(const Vec2& u) const {
+    const Real along = w1 * u.x() + w2 * u.y();
+    const Real s = side(u);
+    if (!(s > 1e-9)) return {q1, q2};
+    return {q1 + radius * (u.x() - along * w1) / s, q2 + radius * (u.y() - along * w2) / s};
+  }
+  // g and its first two derivatives along the arc (by angle) at unit u.
+  void derivatives(const Vec2& u, Real& g, Real& g1, Real& g2) const {
+    const Real along = w1 * u.x() + w2 * u.y();
+    const Real turn = w2 * u.x() - w1 * u.y();  // d along / dt
+    const Real s = std::sqrt(std::max(Real(1e-300), 1 - along * along));
+    const Real linear = q1 * u.x() + q2 * u.y();
+    g = linear + radius * s;
+    g1 = q2 * u.x() - q1 * u.y() - radius * along * turn / s;
+    g2 = -linear - radius * ((turn * turn - along * along) / s + along * along * turn * turn / (s * s * s));
+  }
+};
+
+// (cos, sin) of a small angle (|a| <= 0.1: Taylor series, error < 1e-18), else libm's.
+Vec2 turn_by(Real a) {
+  if (std::abs(a) > 0.1) return {std::cos(a), std::sin(a)};
+  const Real a2 = a * a;
+  return {1 - a2 / 2 * (1 - a2 / 12 * (1 - a2 / 30 * (1 - a2 / 56 * (1 - a2 / 90)))),
+          a * (1 - a2 / 6 * (1 - a2 / 20 * (1 - a2 / 42 * (1 - a2 / 72))))};
+}
+Vec2 rotated(const Vec2& u, const Vec2& r) { return {u.x() * r.x() - u.y() * r.y(), u.y() * r.x() + u.x() * r.y()}; }
+Real cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// The least of g over the arc from unit lo to unit hi (counter-clockwise, less than a half turn),
+// by branch and bound: on a sub-arc with support points x_lo, x_hi at its ends, g(u) is at least
+// max(u . x_lo, u . x_hi) (the support function of the chord [x_lo, x_hi]), whose least over the
+// sub-arc is found in closed form. Sub-arcs whose bound is not below `best` - `noise` are dropped;
+// the others are halved, down to 1/16 of the arc, where the ends' slopes and Newton's method on g'
+// (kept inside a sign change of g') end the search. `consider(u)` gets the minima found (and
+// lowers `best`): every minimum of g on the arc that is below `best` - `noise` is found, to the
+// precision of the Newton iteration (~1e-9 rad, so g to ~1e-18 of the sizes).
+template <class Consider>
+void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real& best, Real noise,
+                   Consider&& consider) {
+  struct Node {
+    Vec2 lo, hi;
+    Real g_lo, g_hi;
+    Vec2 x_lo, x_hi;
+    int depth;
+  };
+  constexpr int kDepth = 4;
+  Node stack[2 * kDepth + 2];
+  int size = 0;
+  stack[size++] = Node{lo, hi, arc.value(lo), arc.value(hi), arc.support(lo), arc.support(hi), 0};
+  while (size > 0) {
+    const Node node = stack[--size];
+    // The chord's bound: g >= u . x_lo up to the chord's normal u*, u . x_hi after it (the ends'
+    // support points); each a sinusoid, least at an end of its part or along -x if that is inside.
+    const auto inside = [](const Vec2& from, const Vec2& to, const Vec2& u) {
+      return cross2(from, u) >= 0 && cross2(u, to) >= 0;
+    };
+    const auto least = [&](const Vec2& x, const Vec2& from, const Vec2& to) {
+      const Real at_ends = std::min(from.dot(x), to.dot(x));
+      return inside(from, to, -x) ? std::min(at_ends, -x.norm()) : at_ends;
+    };
+    const Vec2 chord = node.x_hi - node.x_lo;
+    Vec2 split(-chord.y(), chord.x());  // u . x_lo = u . x_hi there
+    const Real split_length = split.norm();
+    Real bound = std::max(least(node.x_lo, node.lo, node.hi), least(node.x_hi, node.lo, node.hi));
+    if (split_length > 0) {
+      split /= split_length;
+      if (!inside(node.lo, node.hi, split)) split = -split;
+      if (inside(node.lo, node.hi, split))
+        bound = std::max(bound, std::min(least(node.x_lo, node.lo, split), least(node.x_hi, split, node.hi)));
+    }
+    if (bound >= best - noise) continue;
+    Vec2 middle = node.lo + node.hi;
+    middle /= middle.norm();
+    if (node.depth == kDepth) {
+      // The slopes at the ends: an end is the least if g rises from it; else g' changes sign
+      // inside, and Newton's method on g' (kept inside the bracket of that sign change, bisecting
+      // where a step would leave it) finds the minimum.
+      Real g = 0, g1_lo = 0, g1_hi = 0, g2 = 0;
+      arc.derivatives(node.lo, g, g1_lo, g2);
+      arc.derivatives(node.hi, g, g1_hi, g2);
+      if (!(g1_lo < 0)) consider(node.lo);
+      if (!(g1_hi > 0)) consider(node.hi);
+      if (!(g1_lo < 0 && g1_hi > 0)) continue;
+      const Real half_width = std::atan2(std::abs(cross2(node.lo, middle)), node.lo.dot(middle));
+      Real a = -half_width;
+      Real b = half_width;
+      Real t = 0;
+      Vec2 u = middle;
+      Real g1 = 0;
+      arc.derivatives(u, g, g1, g2);
+      for (int iteration = 0; iteration < 30 && g1 != 0; ++iteration) {
+        (g1 < 0 ? a : b) = t;
+        Real next = g2 > 0 ? t - g1 / g2 : (a + b) / 2;
+        if (!(next > a && next < b)) next = (a + b) / 2;
+        const Real moved = std::abs(next - t);
+        u = rotated(u, turn_by(next - t));
+        t = next;
+        arc.derivatives(u, g, g1, g2);
+        if (moved < 1e-9 || b - a < 1e-12) break;  // g is then within ~g'' 1e-18 of its least
+      }
+      consider(u);
+      continue;
+    }
+    const Vec2 x_middle = arc.support(middle);
+    const Real g_middle = arc.value(middle);
+    const Node left{node.lo, middle, node.g_lo, g_middle, node.x_lo, x_middle, node.depth + 1};
+    const Node right{middle, node.hi, g_middle, node.g_hi, x_middle, node.x_hi, node.depth + 1};
+    // The lower end first (popped first).
+    if (node.g_lo < node.g_hi) {
+      stack[size++] = right;
+      stack[size++] = left;
+    } else {
+      stack[size++] = left;
+      stack[size++] = right;
+    }
+  }
+}
+
 }  // namespace
 
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
                               const ContactOptions& options, ContactPoint* out) {
-  // The same answer as contact_convex_triangle (the least overlap of the projections over unit
-  // normals), found without GJK/EPA: the cylinder's lowest point along u is closed-form, so the
-  // overlap f(u) is cheap, and the normals where f has its minima are mostly known in advance
-  // (the faces of the Minkowski difference: the triangle's normal, the cylinder's axis, axis x
-  // edge, the radial directions to the corners). f is taken along those, the least is polished by
-  // the same pattern search (curved parts: rim against an edge or a corner), and any of them with
-  // a gap wider than the margin proves the two apart. Shapes behind a one-sided triangle (the
-  // push-out case) and degenerate inputs go to the general routine.
+  // The least overlap of the projections over unit normals (contact_convex_triangle's answer),
+  // found without GJK/EPA as the least over the critical normals of the overlap f(u), one family
+  // per kind of face of the Minkowski difference of the two shapes: the triangle's face against a
+  // point of the cylinder (n), a corner against a disk (w) or the side (the radial direction from
+  // the corner to the axis), an edge against the side (w x e) or a rim (across e: a 1D search on
+  // a smooth function, rim_arc_least). Where the shapes penetrate, the least of f is on one such
+  // face (a convex body's nearest boundary point from inside is a smooth one), so the least of the
+  // candidates is the least overlap; apart, it may also be on a ridge (a corner against a rim),
+  // whose normals are candidates too. f is exact along any normal, so every candidate is an upper
+  // bound and any with a gap wider than the margin proves the two apart. Shapes behind a
+  // one-sided triangle (the push-out case) and degenerate inputs go to the general routine.
   if (!finite(a, b, c) || !finite(p0, p1, Vec3::Constant(radius)) || !(radius >= 0)) return 0;
   const TriangleFrame tri(a, b, c);
   const Vec3 axis = p1 - p0;
@@ -257,6 +442,14 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     return finish(tri.normal, pushed_depth,
                   make_contact(pushed_point + pushed_depth * tri.normal, tri.normal, pushed_depth));
   }
+  if (const int proven = flat_contact_is_least(p0, w, length, radius, tri, one_sided, limit)) {
+    if (proven < 0) return 0;
+    const Vec3 low = support_cylinder(p0, p1, radius, -tri.normal);
+    const Real depth = tri.normal.dot(tri.v[0] - low);
+    if (!(depth >= -margin)) return 0;
+    return finish(tri.normal, depth,
+                  make_contact(landing_position(tri, tri.normal, low + depth * tri.normal, size), tri.normal, depth));
+  }
 
   // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u),
   // so the overlap is the corners' reach along u beyond mid plus the cylinder's half extent along u.
@@ -264,12 +457,16 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   const auto overlap_along = [&](const Vec3& u) {
     const Real along = u.dot(w);
     const Real top = std::max({u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])});
-    return top + half * std::abs(along) + radius * std::sqrt(std::max(Real(0), 1 - along * along));
+    // |u - (u.w) w|, from 1 - (u.w)^2 unless that cancels (u near +-w, the disks' normals).
+    const Real across = 1 - along * along;
+    const Real side = across > 1e-4 ? std::sqrt(across) : Vec3(u - along * w).norm();
+    return top + half * std::abs(along) + radius * side;
   };
 
-  // The two least candidates are polished (the least is not always in the deepest basin).
-  Real values[2] = {kInf, kInf};
-  Vec3 normals[2] = {tri.normal, tri.normal};
+  const Real noise = 64 * kEps * (std::max({tri.coord, max_abs(p0), max_abs(p1)}) + size);
+  Real best = kInf;
+  Real behind_best = kInf;  // one-sided: the least overlap along the normals behind the triangle
+  Vec3 best_normal = tri.normal;
   bool apart = false;
   const auto consider = [&](const Vec3& direction) {
     const Real len = direction.norm();
@@ -277,25 +474,31 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     const Vec3 u = direction / len;
     const Real value = overlap_along(u);
     if (value < limit) apart = true;
-    if (one_sided && u.dot(tri.normal) < -kBehind) return;  // separates, but is not a normal here
-    if (value < values[0]) {
-      values[1] = values[0];
-      normals[1] = normals[0];
-      values[0] = value;
-      normals[0] = u;
-    } else if (value < values[1]) {
-      values[1] = value;
-      normals[1] = u;
+    if (one_sided && u.dot(tri.normal) < -kBehind) {  // separates, but is not a normal here
+      behind_best = std::min(behind_best, value);
+      return;
+    }
+    if (value < best) {
+      best = value;
+      best_normal = u;
     }
   };
+  // The flat faces of the Minkowski difference and the curved ones around a corner: the face
+  // under a point of the cylinder (n), a disk over a corner (w), the side along an edge (w x e),
+  // the side over a corner (the radial direction from the corner to the axis). Where the two are
+  // apart, the corners against the rims too (a ridge: its normals are the directions from a corner
+  // to its nearest rim point). The in-plane edge normals are kinks of the overlap on the circle
+  // that bounds a one-sided triangle's normals.
   consider(tri.normal);
-  consider(-tri.normal);
+  if (!one_sided) consider(-tri.normal);
   consider(w);
   consider(-w);
   consider(mid - closest_point_on_triangle(mid, a, b, c));
   if (apart) return 0;  // most candidates of the query box are apart along one of these already
+  Vec3 edge_normal[3];
   for (int j = 0; j < 3; ++j) {
     const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
+    edge_normal[j] = e.cross(tri.normal).normalized();
     const Vec3 u = w.cross(e);
     if (u.norm() > 1e-6 * e.norm()) {
       consider(u);
@@ -303,119 +506,106 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     }
     const Vec3 d = mid - tri.v[j];
     consider(d - d.dot(w) * w);
-    consider(e.cross(tri.normal));  // the edge's outward normal in the plane (deep overlaps)
+    if (!one_sided) consider(edge_normal[j]);
   }
   if (apart) return 0;
-  // The least candidate is often the answer already: a flat face of the Minkowski difference
-  // (the triangle's face under a rim point, a disk over a corner, the side over a corner or along
-  // an edge), where no move of the pattern search at its smallest step lowers the overlap. That
-  // probe (one round of moves) settles ~70% of the contacts of resting cylinders.
-  const Real noise = 64 * kEps * (std::max({tri.coord, max_abs(p0), max_abs(p1)}) + size);
-  Vec3 ridges[4] = {w};
-  for (int j = 0; j < 3; ++j) ridges[1 + j] = (tri.v[(j + 1) % 3] - tri.v[j]).normalized();
-  const Vec3 front = one_sided ? tri.normal : Vec3::Zero();
-  Real best = values[0];
-  Vec3 best_normal = normals[0];
-  const bool flat =
-      polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 1, ridges, 4, noise, true, limit);
-  // Else the minimum is on a curved face: a disk's rim against an edge (the faces of the Minkowski
-  // difference swept by an edge and a rim point have normals across the edge, on the great circle
-  // u . e = 0). Along that circle the triangle's support is the edge on the side of its outward
-  // normal m, and the overlap is a smooth 1D function but for kinks where the lowest point of the
-  // cylinder jumps: scanned, then golden-section search around the least sample (~1e-6 rad, so
-  // the depth is within ~1e-11 of the sizes on smooth minima). The least of the circles and the
-  // candidates is then polished (probed first, as above). A flat minimum can be a shallower
-  // basin than a rim on an edge too: the scans are done for it as well, and refined only where
-  // a sample is below it.
-  if (!flat && values[1] < best) {
-    best = values[1];
-    best_normal = normals[1];
-  }
-  // The circle from n (x = 0) through m (x = 1) to -n (x = 2), without trigonometry; one-sided
-  // triangles only need u . n >= 0 (x <= 1). Scanned denser near n (x ~ i^2): resting contacts
-  // have normals close to the face's.
-  const auto on_circle = [&](const Vec3& m, Real x) {
-    const Vec3 u = x <= 1 ? Vec3((1 - x) * tri.normal + x * m) : Vec3((2 - x) * m - (x - 1) * tri.normal);
-    return Vec3(u / u.norm());
-  };
-  const Real reach = one_sided ? 1 : 2;
-  constexpr int kScan = 10;
-  const auto scan_at = [&](int i) { return reach * Real(i * i) / Real(kScan * kScan); };
-  // A circle that cannot hold an overlap below the best so far is not scanned (one-sided: u
-  // between n and m). With x0 the cylinder's lowest point along n, d0 its depth below the plane
-  // and dj its distance inside edge j's line, the overlap along u = cos(f) n + sin(f) m is at
-  // least u . (v_j - x0) = d0 cos(f) + dj sin(f), which over f in [0, pi/2] is least at an end,
-  // min(d0, dj), unless both are negative (then -hypot(d0, dj) bounds it). Resting
-  // cylinders are shallow and mostly away from the edges: on ODE's drop scene this skips most
-  // circles of the flat contacts (the scans were 33 of their ~60 overlap evaluations).
-  const Vec3 lowest = support_cylinder(p0, p1, radius, -tri.normal);
-  const Real lowest_depth = tri.normal.dot(tri.v[0] - lowest);
-  Vec3 circle_m[3];
-  int circle_least[3];
-  Real circle_value[3];
-  bool circle_skipped[3] = {false, false, false};
+  // A corner inside the cylinder: the two meet, and no ridge is the answer.
+  bool meet = false;
   for (int j = 0; j < 3; ++j) {
-    const Vec3 m = (tri.v[(j + 1) % 3] - tri.v[j]).cross(tri.normal).normalized();
-    circle_m[j] = m;
-    circle_value[j] = kInf;
-    circle_least[j] = 0;
-    const Real inside = m.dot(tri.v[j] - lowest);
-    const Real bound =
-        lowest_depth < 0 && inside < 0 ? -std::hypot(lowest_depth, inside) : std::min(lowest_depth, inside);
-    if (one_sided && bound >= best - noise) {
-      circle_skipped[j] = true;
-      continue;
-    }
-    for (int i = 0; i <= kScan; ++i) {
-      const Real value = overlap_along(on_circle(m, scan_at(i)));
-      if (value < circle_value[j]) {
-        circle_value[j] = value;
-        circle_least[j] = i;
-      }
+    const Vec3 d = tri.v[j] - p0;
+    const Real along = d.dot(w);
+    meet = meet || (along >= 0 && along <= length && (d - along * w).squaredNorm() <= radius * radius);
+  }
+  for (int j = 0; j < 3 && !meet; ++j) {
+    for (const Vec3& centre : {p0, p1}) {
+      const Vec3 d = tri.v[j] - centre;
+      const Vec3 radial = d - d.dot(w) * w;
+      const Real radial_length = radial.norm();
+      if (radial_length > 0) consider(centre + (radius / radial_length) * radial - tri.v[j]);
     }
   }
-  bool refined = false;
-  for (int j = 0; j < 3 && !(best < limit); ++j) {
-    if (circle_skipped[j] || (flat && !(circle_value[j] < best - noise))) continue;
-    refined = true;
-    const Vec3& m = circle_m[j];
-    const auto consider_at = [&](Real x) {
-      const Vec3 u = on_circle(m, x);
-      const Real value = overlap_along(u);
-      if (value < best) {
-        best = value;
-        best_normal = u;
-      }
-      return value;
-    };
-    Real lo = scan_at(std::max(circle_least[j] - 1, 0));
-    Real hi = scan_at(std::min(circle_least[j] + 1, kScan));
-    constexpr Real kGolden = 0.38196601125010515;  // (3 - sqrt 5) / 2
-    Real x1 = lo + kGolden * (hi - lo);
-    Real x2 = hi - kGolden * (hi - lo);
-    Real f1 = consider_at(x1);
-    Real f2 = consider_at(x2);
-    for (int iteration = 0; iteration < 24; ++iteration) {
-      if (f1 < f2) {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = lo + kGolden * (hi - lo);
-        f1 = consider_at(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = hi - kGolden * (hi - lo);
-        f2 = consider_at(x2);
+  if (apart) return 0;
+  // A rim against an edge: the curved faces of the Minkowski difference whose normals are across
+  // an edge e, on the great circle u(t) = cos(t) n + sin(t) m (m: the edge's outward normal in the
+  // plane), where the edge is the triangle's support for t in [0, pi]. Between the kink where
+  // u . w changes sign (u = +-w x e, a candidate above) and the ends, one rim (centre c) is the
+  // cylinder's support and the overlap is the smooth support function of the rim's shadow across
+  // e (an ellipse), minimized by rim_arc_least. The front quarter (t <= pi/2) holds answers; the
+  // quarter behind holds those of two-sided triangles and, for one-sided ones, shows whether the
+  // least over the front may be on its bounding circle (below).
+  const Vec2 quarter_ends[3] = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0)};
+  const auto split_at_kink = [&](const Vec3& a1, const Vec3& a2, const Vec2& lo, const Vec2& hi, const Vec3& v) {
+    RimArc arc;
+    arc.w1 = w.dot(a1);
+    arc.w2 = w.dot(a2);
+    arc.radius = radius;
+    // u . w = 0 at +-(w2, -w1): a kink of the overlap (the rims swap), inside or not.
+    Vec2 kink(arc.w2, -arc.w1);
+    const Real kink_length = kink.norm();
+    Vec2 ends[3] = {lo, hi, hi};
+    int pieces = 1;
+    if (kink_length > 0) {
+      kink /= kink_length;
+      if (cross2(lo, kink) < 0) kink = -kink;
+      if (cross2(lo, kink) > 0 && cross2(kink, hi) > 0) {
+        ends[1] = kink;
+        pieces = 2;
       }
     }
+    for (int k = 0; k < pieces; ++k) {
+      const Vec2 centre = ends[k] + ends[k + 1];
+      const bool lower_end = arc.w1 * centre.x() + arc.w2 * centre.y() >= 0;
+      const Vec3 q = v - (lower_end ? p0 : p1);
+      arc.q1 = q.dot(a1);
+      arc.q2 = q.dot(a2);
+      rim_arc_least(arc, ends[k], ends[k + 1], best, noise, [&](const Vec2& u) { consider(u.x() * a1 + u.y() * a2); });
+    }
+  };
+  // Quick bounds of a quarter: for any point x of the cylinder, the overlap along
+  // u = cos(t) n + sin(t) m is at least u . (v_j - x) = dn cos(t) + dm sin(t), which over a
+  // quarter is least at an end (unless both of its ends' values are negative). Taken with the
+  // cylinder's lowest point along n and its support along the front quarter's middle, and with
+  // its highest point and the support along the middle of the quarter behind.
+  const Vec3 lowest = support_cylinder(p0, p1, radius, -tri.normal);
+  const Vec3 highest = support_cylinder(p0, p1, radius, tri.normal);
+  const auto quarter_bound = [](Real along_n, Real along_m) {
+    return along_n < 0 && along_m < 0 ? -std::hypot(along_n, along_m) : std::min(along_n, along_m);
+  };
+  for (int j = 0; j < 3 && !apart; ++j) {
+    const Vec3& m = edge_normal[j];
+    const Vec3 down = tri.v[j] - lowest;
+    const Vec3 up = tri.v[j] - highest;
+    const Vec3 down_middle = tri.v[j] - support_cylinder(p0, p1, radius, -(tri.normal + m));
+    const Vec3 up_middle = tri.v[j] - support_cylinder(p0, p1, radius, tri.normal - m);
+    const Real bounds[2] = {std::max(quarter_bound(down.dot(tri.normal), down.dot(m)),
+                                     quarter_bound(down_middle.dot(tri.normal), down_middle.dot(m))),
+                            std::max(quarter_bound(-up.dot(tri.normal), up.dot(m)),
+                                     quarter_bound(-up_middle.dot(tri.normal), up_middle.dot(m)))};
+    for (int quarter = 0; quarter < 2; ++quarter) {
+      if (bounds[quarter] >= best - noise) continue;
+      split_at_kink(tri.normal, m, quarter_ends[quarter], quarter_ends[quarter + 1], tri.v[j]);
+    }
   }
-  if ((refined || !flat) && !(best < limit)) {
-    polish_normal(overlap_along, front, best_normal, best, 1e-2, 1e-6, 150, ridges, 4, noise, true, limit);
+  if (apart || !(best >= limit)) return 0;
+  // A one-sided triangle's normals are bounded by the circle u . n = 0, where the least over the
+  // front may lie rather than at a critical point of the overlap. It does only if the least over
+  // the sphere is behind, below every critical point in front. Then the least on that circle is
+  // taken too: between the edges' normals m_(k-1) and m_k the corner v_k is the triangle's support,
+  // and the overlap is the same rim's support function as across the edges (arcs split where
+  // u . w changes sign; the kinks themselves, the m_j and +-n x w, are candidates).
+  if (one_sided && behind_best < best - noise) {
+    const Vec3 across = tri.normal.cross(w);
+    consider(across);
+    consider(-across);
+    for (const Vec3& m : edge_normal) consider(m);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& a1 = edge_normal[(k + 2) % 3];
+      const Vec3 a2 = tri.normal.cross(a1);
+      const Vec3& end = edge_normal[k];
+      split_at_kink(a1, a2, Vec2(1, 0), Vec2(end.dot(a1), end.dot(a2)), tri.v[k]);
+    }
   }
   if (!(best >= -margin)) return 0;
-  if (one_sided && best_normal.dot(tri.normal) < -kBehind) return general();
   return finish(
       best_normal, best,
       make_contact(

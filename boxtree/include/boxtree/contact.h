@@ -109,17 +109,19 @@ struct ConvexSupport {
 int contact_convex_triangle(const ConvexSupport& shape, const Vec3& a, const Vec3& b, const Vec3& c,
                             const ContactOptions& options, ContactPoint* out);
 
-// A cylinder (axis p0-p1, radius): the same answer as contact_convex_triangle with
-// support_cylinder (least overlap over the normals, depth to ~1e-11 of the sizes), but closed-form
-// where possible: the overlap is taken along the normals of the known flat cases (the triangle's
-// normal, the axis, axis x edge, radial directions to the corners, the edges' in-plane normals);
-// the curved case (a rim against an edge) has its normal across the edge and is searched along
-// those three circles of normals, then polished. No GJK/EPA runs except behind a one-sided
-// triangle or for degenerate input. This and contact_convex_triangle are both local searches: on
-// deep overlaps they can end in different local minima (rarely; either may find the deeper one).
-// When the normal is the triangle's, a patch: the ends of the side's lowest line and points of
-// the lower disk's rim over the triangle (a cylinder lying or standing on a facet), each at its
-// own depth.
+// A cylinder (axis p0-p1, radius): the answer contact_convex_triangle approximates with
+// support_cylinder, the least overlap of the projections over unit normals, taken as the least
+// over the critical normals of every kind of face of the two shapes' Minkowski difference: the
+// triangle's normal, the axis, axis x edge, the radial directions from the corners to the axis
+// (closed form), and the normals across each edge where a rim meets it (a smooth 1D function,
+// minimized by branch and bound plus Newton's method, to ~1e-9 rad: the depth to ~1e-15 of the
+// sizes); apart, the directions from the corners to their nearest rim points too. Penetrating,
+// that is the least overlap (the least is at a smooth point of the difference's boundary); the
+// overlap along the returned normal equals the depth. One-sided triangles: over the normals in
+// front only, the circle bounding them included when the least overall is behind. No GJK/EPA
+// runs except behind a one-sided triangle (the push-out) or for degenerate input. When the normal
+// is the triangle's, a patch: the ends of the side's lowest line and points of the lower disk's
+// rim over the triangle (a cylinder lying or standing on a facet), each at its own depth.
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
                               const ContactOptions& options, ContactPoint* out);
 
