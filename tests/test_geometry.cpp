@@ -640,8 +640,7 @@ TEST(GeometryTriangleTriangle, TouchingIsExactForAnyCoordinates) {
   };
   for (int i = 0; i < scaled(4000); ++i) {
     const Vec3 offset = rng.point(-1e3, 1e3);
-    const std::array<Vec3, 3> p = {offset + rng.point(-1, 1), offset + rng.point(-1, 1),
-                                   offset + rng.point(-1, 1)};
+    const std::array<Vec3, 3> p = {offset + rng.point(-1, 1), offset + rng.point(-1, 1), offset + rng.point(-1, 1)};
     // Sharing one corner or one edge, folded to any side.
     std::array<Vec3, 3> q = {p[i % 3], offset + rng.point(-1, 1), offset + rng.point(-1, 1)};
     if (i % 2) q[1] = p[(i + 1) % 3];
