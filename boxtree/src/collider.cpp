@@ -6,6 +6,7 @@
 
 #include "boxtree/active_edges.h"
 #include "boxtree/geometry.h"
+#include "contact_polytope.h"
 #include "internal.h"
 
 namespace boxtree {
@@ -152,9 +153,8 @@ void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequ
   const ContactOptions options = options_for(mesh, request, result);
   Obb query = box;
   query.half_extents.array() += request.margin;
-  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
-                                        [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o,
-                                            ContactPoint* out) { return contact_box_triangle(box, a, b, c, o, out); });
+  const detail::BoxTriangleContacts contacts(box);  // contact_box_triangle, the box's polytope built once
+  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, contacts);
   reduce(request, result);
 }
 
