@@ -329,6 +329,47 @@ TEST(ContactBox, EdgeAcrossEdge) {
   EXPECT_TRUE(c[0].position.isApprox(Vec3(0.1, 0, 0), 1e-9)) << str(c[0].position);
 }
 
+// An engine's rotation is orthonormal to single precision only (Bullet's float basis: 1e-7 off).
+// The box's separating axes are worked out in its frame (contact_sat.cpp, box_axes), but an edge
+// axis' normal must still be exactly across the box's edges: leaning by 1e-7 it put the box's
+// lowest edge above the box's lowest corner by more than the tolerance, edge_contacts found no
+// edge pair, and the box fell back to a face 0.16 deep instead of the edge pair 0.09 deep (the
+// pose of BulletTraps.AdapterContactsAreTheCollidersContacts, where the adapter's float basis and
+// the test's double one then disagreed). The same contacts, to 1e-6, for the float basis and the
+// same rotation made orthonormal.
+TEST(ContactBox, SinglePrecisionRotationGivesTheRotationsContacts) {
+  Mat3 single;
+  single << 0.95779544115066528, 0.28322514891624451, -0.049104921519756317, -0.27163845300674438, 0.83592760562896729,
+      -0.47690412402153015, -0.094023093581199646, 0.47011542320251465, 0.87758255004882812;
+  ASSERT_GT((single.transpose() * single - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-8);
+  const Mat3 exact = Eigen::Quaterniond(single).normalized().toRotationMatrix();
+  const Vec3 center(5.2989468574523926, 3.5946016311645508, 0.89999997615814209);
+  const Vec3 half(0.60000002384185791, 0.40000000596046448, 0.30000001192092896);
+  const std::array<Vec3, 3> facets[2] = {
+      {Vec3(4, 3, 0.63979101607037547), Vec3(5, 4, 0.71616944430071694), Vec3(4, 4, 0.60641755098665173)},
+      {Vec3(4, 3, 0.63979101607037547), Vec3(5, 3, 0.70483862412371445), Vec3(5, 4, 0.71616944430071694)}};
+  ContactOptions options;
+  options.margin = 0.015620499849319458;
+  options.two_sided = false;  // a terrain
+  for (const auto& t : facets) {
+    ContactPoint got[kMaxBoxTriangleContacts];
+    ContactPoint want[kMaxBoxTriangleContacts];
+    const int n = contact_box_triangle(make_box(center, single, half), t[0], t[1], t[2], options, got);
+    ASSERT_EQ(n, contact_box_triangle(make_box(center, exact, half), t[0], t[1], t[2], options, want));
+    ASSERT_GT(n, 0);
+    for (int i = 0; i < n; ++i) {
+      EXPECT_LT((got[i].position - want[i].position).norm(), 1e-6) << i << ": " << str(got[i].position);
+      EXPECT_LT((got[i].normal - want[i].normal).norm(), 1e-6) << i << ": " << str(got[i].normal);
+      EXPECT_NEAR(got[i].depth, want[i].depth, 1e-6) << i;
+    }
+  }
+  // The first facet's contact is the edge pair, not a face.
+  ContactPoint c[kMaxBoxTriangleContacts];
+  ASSERT_EQ(contact_box_triangle(make_box(center, single, half), facets[0][0], facets[0][1], facets[0][2], options, c),
+            1);
+  EXPECT_NEAR(c[0].depth, 0.09055, 1e-5);
+}
+
 TEST(ContactBox, MarginAndOneSided) {
   ContactPoint c[kMaxBoxTriangleContacts];
   const Obb above = make_box({0, 0, 0.55}, Mat3::Identity(), {0.5, 0.5, 0.5});

@@ -430,5 +430,46 @@ TEST(PackedTree, AnyTreeHoldsThePackedFormForAabb) {
   EXPECT_EQ(AnyTree::build(mesh, parse_method("obb-min")).packed(), nullptr);
 }
 
+// The oriented box's leaf test takes the box's frame once per query (geometry.cpp,
+// detail::ObbTriangleTest) and must answer as triangle_overlaps_obb does to the bit, also for
+// boxes that only just touch a facet: axis-aligned boxes with a face through a vertex (exact
+// contact), and turned boxes grown or shrunk by a few ulps around a vertex.
+TEST(PackedTree, ObbLeafTestIsTriangleOverlapsObb) {
+  const TriangleMesh terrain = make_terrain(24, 24, 5, 24, 3);
+  const PackedAabbTree packed(build_tree<Aabb>(terrain));
+  const auto reference = [&](const Obb& box) {
+    std::vector<FacetId> out;
+    for (FacetId f = 0; f < terrain.facet_count(); ++f)
+      if (triangle_overlaps_obb(terrain.corner(f, 0), terrain.corner(f, 1), terrain.corner(f, 2), box))
+        out.push_back(f);
+    return out;
+  };
+  Random r(17);
+  std::size_t reported = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Vec3& vertex = terrain.vertices[r.next() % terrain.vertices.size()];
+    const Real half_x = r.uniform(0.1, 2.0);
+    const Real half_y = r.uniform(0.1, 2.0);
+    const Real half_z = r.uniform(0.1, 2.0);
+    Obb box;
+    box.half_extents = Vec3(half_x, half_y, half_z);
+    if (i % 2 == 0) {
+      // Resting on the vertex: the bottom face through it.
+      box.axes = Mat3::Identity();
+      box.center = vertex + Vec3(0, 0, half_z);
+    } else {
+      // Turned, with the vertex a few ulps inside or outside its bottom face.
+      box.axes = random_rotation(r);
+      const Real ulps = r.uniform(-4, 4);
+      const Real below = half_z * (1 + ulps * std::numeric_limits<Real>::epsilon());
+      box.center = vertex + box.axes.col(2) * below;
+    }
+    const std::vector<FacetId> expected = reference(box);
+    EXPECT_EQ(query_overlap(packed, box), expected) << "box " << i;
+    reported += expected.size();
+  }
+  EXPECT_GT(reported, 0u);
+}
+
 }  // namespace
 }  // namespace boxtree

@@ -6,6 +6,7 @@
 
 #include "boxtree/active_edges.h"
 #include "boxtree/geometry.h"
+#include "contact_polytope.h"
 #include "internal.h"
 
 namespace boxtree {
@@ -163,9 +164,8 @@ void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequ
   const ContactOptions options = options_for(mesh, request, result);
   Obb query = box;
   query.half_extents.array() += request.margin;
-  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
-                                        [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o,
-                                            ContactPoint* out) { return contact_box_triangle(box, a, b, c, o, out); });
+  const detail::BoxTriangleContacts contacts(box);  // contact_box_triangle, the box's polytope built once
+  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, contacts);
   reduce(request, result);
 }
 
@@ -213,12 +213,13 @@ void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, con
   // Moved into the mesh's frame once per call, into per-thread storage (no allocation once warm).
   thread_local ConvexPolyhedron placed;
   transform_polyhedron(hull.local, hull.mesh_from_local, placed);
-  // The query stops at the leaf boxes: the narrowphase's first axes (the triangle's normal, the
-  // hull's faces at three dot products each) reject what the box's exact triangle test would,
-  // and the box is looser than the hull anyway.
+  // The exact triangle test of the hull's box (its frame taken once per query, its face axes
+  // first) is cheaper per leaf than the leaf boxes' 15-axis test against it, and passes fewer
+  // facets to the narrowphase (in the drop scene 27.9 instead of 37.1 per call): every facet
+  // within the margin of the hull meets its box grown by the margin.
   const Obb query = placed_box(hull.local.vertices, hull.mesh_from_local, hull.rounding + request.margin);
   run_pipeline<kMaxPolyhedronTriangleContacts>(
-      mesh, query, FacetTest::leaf_volume, request, options, result,
+      mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         const int n = contact_polyhedron_triangle(placed, a, b, c, o, out);
         for (int i = 0; i < n; ++i) out[i].depth += hull.rounding;

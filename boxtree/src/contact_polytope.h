@@ -91,6 +91,22 @@ Polytope polytope_of_box(const Obb& box, PolytopeArrays& arrays);
 Polytope polytope_of_triangle(const TriangleFrame& tri, PolytopeArrays& arrays);
 Polytope polytope_of_polyhedron(const ConvexPolyhedron& polyhedron);
 
+// contact_box_triangle (contact.h) for one box against many triangles (a midphase's candidates):
+// the box's polytope is built once, by the constructor. It points into this object's own arrays,
+// so the object is neither copied nor moved. Defined in contact_sat.cpp.
+class BoxTriangleContacts {
+ public:
+  explicit BoxTriangleContacts(const Obb& box);
+  BoxTriangleContacts(const BoxTriangleContacts&) = delete;
+  BoxTriangleContacts& operator=(const BoxTriangleContacts&) = delete;
+  int operator()(const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options, ContactPoint* out) const;
+
+ private:
+  bool valid_;
+  PolytopeArrays arrays_;
+  Polytope polytope_;
+};
+
 // Contacts of a convex polytope against a triangle by separating axes (at most max_contacts,
 // written to `out`; contact.h's conventions). Defined in contact_sat.cpp.
 int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const ContactOptions& options, int max_contacts,

@@ -245,6 +245,86 @@ PolytopeTrianglePair closest_polytope_triangle(const Polytope& shape, const Tria
   return best;
 }
 
+// The separating axes of a box (polytope_of_box) against a triangle, worked out in the box's frame
+// as Akenine-Moller's triangle-box test does ("Fast 3D Triangle-Box Overlap Testing", JGT 6(1),
+// 2001): there the box is centred and axis-aligned, so its projection on an axis is |n| . h, a
+// face axis reads one coordinate of the corners, and an edge axis e_k x E has one zero
+// component. The same axes, in the same order and with the same tie-breaking as the general loop
+// of polytope_triangle; the values differ from it by rounding only. A face axis of the box is
+// one axis for its two opposite faces (each one's overlap is the other's reverse). Returns false
+// as soon as an axis separates by more than `margin`.
+bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real center_side, Axis& best_face,
+              Axis& best_tri_face, Axis& best_edge, Real& separation) {
+  const auto consider = [](Axis& best, const Axis& axis) {
+    if (axis.overlap < best.overlap) best = axis;
+  };
+  const Mat3 box_from_world = box.axes.transpose();
+  const Vec3& h = box.half_extents;
+  Vec3 local[3];
+  for (int i = 0; i < 3; ++i) local[i] = box_from_world * (tri.v[i] - box.center);
+  // Projections of the triangle's corners on n (local), and the box's radius along it.
+  const auto both_ways = [&](const Vec3& n) {
+    const Real p0 = n.dot(local[0]);
+    const Real p1 = n.dot(local[1]);
+    const Real p2 = n.dot(local[2]);
+    const Real radius = h.dot(n.cwiseAbs());
+    // Moving the box along +n: the triangle's top minus the box's bottom; along -n, the reverse.
+    return std::pair<Real, Real>{std::max({p0, p1, p2}) + radius, radius - std::min({p0, p1, p2})};
+  };
+  if (!tri.degenerate) {
+    const auto [up, down] = both_ways(box_from_world * tri.normal);
+    separation = std::max(separation, -std::min(up, down));
+    const Real sigma = center_side >= 0 ? 1 : -1;
+    consider(best_tri_face, {sigma * tri.normal, sigma > 0 ? up : down, AxisKind::kTriangleFace, 0, 0});
+  }
+  if (separation > margin) return false;
+  for (int k = 0; k < 3; ++k) {
+    // Face 2k (outward +a_k, N = -a_k) and face 2k + 1 (outward -a_k, N = +a_k).
+    const Real lo = std::min({local[0][k], local[1][k], local[2][k]});
+    const Real hi = std::max({local[0][k], local[1][k], local[2][k]});
+    const Real along_minus = h[k] - lo;  // moving the box along -a_k clears the triangle
+    const Real along_plus = hi + h[k];
+    separation = std::max(separation, -std::min(along_minus, along_plus));
+    if (separation > margin) return false;
+    consider(best_face, {-box.faces[2 * k].normal, along_minus, AxisKind::kShapeFace, 2 * k, 0});
+    consider(best_face, {-box.faces[2 * k + 1].normal, along_plus, AxisKind::kShapeFace, 2 * k + 1, 0});
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int i = (k + 1) % 3;
+    const int j = (k + 2) % 3;
+    for (int t = 0; t < 3; ++t) {
+      const Vec3 e = local[(t + 1) % 3] - local[t];
+      // u = e_k x e: component k is zero, (i, j) are (-e_j, e_i).
+      Vec3 u = Vec3::Zero();
+      u[i] = -e[j];
+      u[j] = e[i];
+      const Real len = u.norm();
+      if (!(len > 1e-6 * e.norm())) continue;
+      const Real inverse = 1 / len;
+      const Real p0 = u[i] * local[0][i] + u[j] * local[0][j];
+      const Real p1 = u[i] * local[1][i] + u[j] * local[1][j];
+      const Real p2 = u[i] * local[2][i] + u[j] * local[2][j];
+      const Real radius = h[i] * std::abs(u[i]) + h[j] * std::abs(u[j]);
+      const Real plus = (std::max({p0, p1, p2}) + radius) * inverse;
+      const Real minus = (radius - std::min({p0, p1, p2})) * inverse;
+      separation = std::max(separation, -std::min(plus, minus));
+      if (separation > margin) return false;
+      if (plus < best_edge.overlap || minus < best_edge.overlap) {
+        // The normal as the general loop makes it, from the world's edge: exactly across the
+        // box's edges even when the axes are orthonormal to single precision only (an engine's
+        // rotation), where A u would lean by ~1e-7 and edge_contacts could miss the edge pair.
+        const Vec3 world = box.axes.col(k).cross(tri.v[(t + 1) % 3] - tri.v[t]);
+        const Real world_length = world.norm();
+        if (!(world_length > 0)) continue;
+        const Vec3 n = world / world_length;
+        consider(best_edge, {n, plus, AxisKind::kEdges, k, t});
+        consider(best_edge, {-n, minus, AxisKind::kEdges, k, t});
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 // Separating axes of a convex polytope against a triangle. Every axis is tested in both
@@ -289,7 +369,9 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   const auto consider = [](Axis& best, const Axis& axis) {
     if (axis.overlap < best.overlap) best = axis;
   };
-  if (!tri.degenerate) {
+  if (shape.kind == Polytope::Kind::kBox) {
+    if (!box_axes(shape, tri, margin, center_side, best_face, best_tri_face, best_edge, separation)) return 0;
+  } else if (!tri.degenerate) {
     const auto [up, down] = overlaps_both_ways(tri.normal);
     separation = std::max(separation, -std::min(up, down));
     // Whichever side the shape's centre is on.
@@ -299,7 +381,7 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   // Apart by more than the margin along any axis: no contact, the other axes need not be tried
   // (most candidates of a query volume are apart along the triangle's normal or a face's).
   if (separation > margin) return 0;
-  for (int f = 0; f < shape.face_count; ++f) {
+  for (int f = 0; f < shape.face_count && shape.kind != Polytope::Kind::kBox; ++f) {
     const Vec3 n = -shape.faces[f].normal;
     const auto [ov, reverse] = overlaps_both_ways_on_face(f, n);
     separation = std::max(separation, -std::min(ov, reverse));
@@ -339,7 +421,7 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
         consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
       }
     }
-  } else {
+  } else if (shape.kind != Polytope::Kind::kBox) {
     for (int k = 0; k < shape.direction_count; ++k) {
       for (int j = 0; j < 3; ++j) {
         const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
@@ -470,6 +552,16 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
 }  // namespace detail
 
 using namespace detail;  // the narrowphase's helpers (contact_internal.h, contact_polytope.h)
+
+BoxTriangleContacts::BoxTriangleContacts(const Obb& box)
+    : valid_(box.center.allFinite() && box.axes.allFinite() && box.half_extents.allFinite()),
+      polytope_(polytope_of_box(box, arrays_)) {}
+
+int BoxTriangleContacts::operator()(const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options,
+                                    ContactPoint* out) const {
+  if (!valid_ || !finite(a, b, c)) return 0;
+  return polytope_triangle(polytope_, TriangleFrame(a, b, c), options, kMaxBoxTriangleContacts, out);
+}
 
 int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options,
                          ContactPoint* out) {

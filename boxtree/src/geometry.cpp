@@ -464,25 +464,12 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
 // ---------------------------------------------------------------------------------------------
 // Triangle / volumes and shapes
 
-bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& query) {
-  // Akenine-Moller, "Fast 3D Triangle-Box Overlap Testing", JGT 6(1), 2001. A zero axis (a
-  // degenerate triangle's normal, an edge parallel to a box axis or of zero length) projects
-  // everything to 0 with radius 0 and so never separates: no special case is needed, and for a
-  // degenerate triangle the remaining axes (box faces, edge x box axes) are exactly the
-  // separating axes of a segment against a box (Ericson 5.3.3).
-  // NaN anywhere (a NaN query box, or an oriented box with a NaN centre or axis, which reaches
-  // here as NaN corners) would fail every separating comparison, i.e. "overlap".
-  if (a.hasNaN() || b.hasNaN() || c.hasNaN() || query.min.hasNaN() || query.max.hasNaN()) return false;
-  // An infinite side (a half-space query) would make the centre or the half extents below
-  // infinite or NaN, and NaN never separates. The triangle lies in its own bounds, so the box
-  // clipped to them overlaps it exactly when the box does, and is finite for a finite triangle.
-  Aabb box = query;
-  if ((!box.min.allFinite() || !box.max.allFinite()) && !clip_infinite_sides(box, Aabb::from_triangle(a, b, c)))
-    return false;
+namespace detail {
+
+bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box) {
   // Box face normals first, on the untranslated coordinates (no rounding at all).
   for (int k = 0; k < 3; ++k) {
     if (std::max({a[k], b[k], c[k]}) < box.min[k] || std::min({a[k], b[k], c[k]}) > box.max[k]) return false;
-    if (!(box.min[k] <= box.max[k])) return false;  // empty or NaN box
   }
   // A corner in the box decides exactly. The axes below are rounded (the centre, the half
   // extents), and a corner on the box's boundary could come out an ulp outside: every query with
@@ -516,6 +503,29 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
   return !(std::min({d0, d1, d2}) > radius || std::max({d0, d1, d2}) < -radius);
 }
 
+}  // namespace detail
+
+bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& query) {
+  // Akenine-Moller, "Fast 3D Triangle-Box Overlap Testing", JGT 6(1), 2001. A zero axis (a
+  // degenerate triangle's normal, an edge parallel to a box axis or of zero length) projects
+  // everything to 0 with radius 0 and so never separates: no special case is needed, and for a
+  // degenerate triangle the remaining axes (box faces, edge x box axes) are exactly the
+  // separating axes of a segment against a box (Ericson 5.3.3).
+  // NaN anywhere (a NaN query box, or an oriented box with a NaN centre or axis, which reaches
+  // here as NaN corners) would fail every separating comparison, i.e. "overlap".
+  if (a.hasNaN() || b.hasNaN() || c.hasNaN() || query.min.hasNaN() || query.max.hasNaN()) return false;
+  // An infinite side (a half-space query) would make the centre or the half extents below
+  // infinite or NaN, and NaN never separates. The triangle lies in its own bounds, so the box
+  // clipped to them overlaps it exactly when the box does, and is finite for a finite triangle.
+  Aabb box = query;
+  if ((!box.min.allFinite() || !box.max.allFinite()) && !clip_infinite_sides(box, Aabb::from_triangle(a, b, c)))
+    return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!(box.min[k] <= box.max[k])) return false;  // empty or NaN box
+  }
+  return detail::triangle_overlaps_box(a, b, c, box);
+}
+
 bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box) {
   // In the box frame the box is axis-aligned; rotations keep the test's answer.
   const Mat3 box_from_world = box.axes.transpose();
@@ -523,6 +533,39 @@ bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Ob
   return triangle_overlaps_aabb(box_from_world * (a - box.center), box_from_world * (b - box.center),
                                 box_from_world * (c - box.center), local);
 }
+
+namespace detail {
+
+ObbTriangleTest::ObbTriangleTest(const Obb& box)
+    : box_from_world_(box.axes.transpose()),
+      center_(box.center),
+      local_{-box.half_extents, box.half_extents},
+      valid_(box.center.allFinite() && box.axes.allFinite() && box.half_extents.allFinite() &&
+             (box.half_extents.array() >= 0).all()) {}
+
+bool ObbTriangleTest::operator()(const Vec3& a, const Vec3& b, const Vec3& c) const {
+  if (!valid_)
+    return triangle_overlaps_aabb(box_from_world_ * (a - center_), box_from_world_ * (b - center_),
+                                  box_from_world_ * (c - center_), local_);
+  // The corners in the box's frame a coordinate at a time, each tried on its face axis at once:
+  // most leaves that fail are apart along a face axis. Each coordinate is the row's dot product,
+  // the same sums in the same order as the matrix product of triangle_overlaps_obb.
+  const Vec3 da = a - center_;
+  const Vec3 db = b - center_;
+  const Vec3 dc = c - center_;
+  Vec3 la, lb, lc;
+  for (int k = 0; k < 3; ++k) {
+    la[k] = box_from_world_.row(k).dot(da);
+    lb[k] = box_from_world_.row(k).dot(db);
+    lc[k] = box_from_world_.row(k).dot(dc);
+    if (std::max({la[k], lb[k], lc[k]}) < local_.min[k] || std::min({la[k], lb[k], lc[k]}) > local_.max[k])
+      return false;
+  }
+  if (la.hasNaN() || lb.hasNaN() || lc.hasNaN()) return false;
+  return triangle_overlaps_box(la, lb, lc, local_);
+}
+
+}  // namespace detail
 
 bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const Sphere& sphere) {
   // d^2 <= r^2 alone would let a negative radius act as its magnitude.

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "boxtree/mesh.h"
+#include "boxtree/volume/aabb.h"
+#include "boxtree/volume/obb.h"
 
 namespace boxtree::detail {
 
@@ -16,6 +18,25 @@ namespace boxtree::detail {
 // plus 1e-12 * |t|_1): may report boxes that close as overlapping, never the reverse. NaN input
 // gives false. Defined in geometry.cpp.
 bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb);
+
+// The body of triangle_overlaps_aabb (Akenine-Moller's test) for a finite, non-empty box and
+// corners without NaN (not checked). Defined in geometry.cpp.
+bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box);
+
+// triangle_overlaps_obb for one box against many triangles (a query's leaf tests): the box's frame
+// and validity are taken once. The same arithmetic, so the same answers to the bit. Defined in
+// geometry.cpp.
+class ObbTriangleTest {
+ public:
+  explicit ObbTriangleTest(const Obb& box);
+  bool operator()(const Vec3& a, const Vec3& b, const Vec3& c) const;
+
+ private:
+  Mat3 box_from_world_;
+  Vec3 center_;
+  Aabb local_;
+  bool valid_;
+};
 
 // (b1, b2, n) orthonormal for a unit n (Duff, Burgess, Christensen, Hery, Kensler, Liani,
 // Villemin, "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017): branch-free of any

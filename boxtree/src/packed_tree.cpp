@@ -776,10 +776,18 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
   ++sink.local.volume_tests;
   if (!overlaps(tree.bounds(), shape)) return;
   const TriangleMesh& mesh = tree.mesh();
+  // An oriented box's frame is taken once per query, not once per leaf.
+  const auto exact = [&] {
+    if constexpr (std::is_same_v<Shape, Obb>) {
+      return detail::ObbTriangleTest(shape);
+    } else {
+      return [&](const Vec3& a, const Vec3& b, const Vec3& c) { return triangle_overlaps(a, b, c, shape); };
+    }
+  }();
   const auto leaf = [&](FacetId f) {
     if (test == FacetTest::exact_triangle) {
       ++sink.local.leaf_tests;
-      if (!triangle_overlaps(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2), shape)) return true;
+      if (!exact(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2))) return true;
     }
     return visit(f);
   };
