@@ -90,6 +90,9 @@ inline int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) 
     permanent += std::abs(u[i]) * (std::abs(v[j] * w[k]) + std::abs(v[k] * w[j]));
   }
   if (std::abs(det) > 1e-14 * permanent) return sign(det);
+  // Two equal points make the determinant exactly zero (shared corners of adjacent facets: the
+  // common undecided case, and the expansions below are slow).
+  if (a == b || a == c || a == d || b == c || b == d || c == d) return 0;
   std::array<Expansion, 3> eu, ev, ew;
   for (int i = 0; i < 3; ++i) {
     eu[i] = difference(b[i], a[i]);
