@@ -92,6 +92,13 @@ std::vector<Scene> scenes() {
 }
 
 // A point near the mesh's surface: a random facet's random point, moved a little along its normal.
+// The point of the oriented box farthest along d (a support mapping, for SupportShape).
+Vec3 obb_support(const Obb& box, const Vec3& d) {
+  Vec3 p = box.center;
+  for (int k = 0; k < 3; ++k) p += box.axes.col(k) * (d.dot(box.axes.col(k)) >= 0 ? 1 : -1) * box.half_extents[k];
+  return p;
+}
+
 Vec3 near_surface(const TriangleMesh& m, Random& random, Real spread) {
   const FacetId f = FacetId(random.integer(0, int(m.facet_count()) - 1));
   Real u = random.uniform(0, 1), v = random.uniform(0, 1);
@@ -214,11 +221,7 @@ TEST(Collider, EngineNarrowphaseOnOneSidedFacetsPushesOutThroughTheFront) {
   std::size_t turned = 0, contacts = 0;
   for (int trial = 0; trial < test::scaled(200); ++trial) {
     const Obb box{near_surface(mesh->mesh(), random, 0.6), random.rotation(), Vec3(0.5, 0.4, 0.3)};
-    auto support = [&](const Vec3& d) {
-      Vec3 p = box.center;
-      for (int k = 0; k < 3; ++k) p += box.axes.col(k) * (d.dot(box.axes.col(k)) >= 0 ? 1 : -1) * box.half_extents[k];
-      return p;
-    };
+    auto support = [&box](const Vec3& d) { return obb_support(box, d); };
     auto engine = [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
       EXPECT_TRUE(o.two_sided);
       const int n = contact_box_triangle(box, a, b, c, o, out);
@@ -251,11 +254,7 @@ TEST(Collider, EngineContactsBeyondTheMarginDoNotComeBack) {
   std::size_t contacts = 0;
   for (int trial = 0; trial < test::scaled(200); ++trial) {
     const Obb box{near_surface(mesh->mesh(), random, 0.3), random.rotation(), Vec3(0.5, 0.4, 0.3)};
-    auto support = [&](const Vec3& d) {
-      Vec3 p = box.center;
-      for (int k = 0; k < 3; ++k) p += box.axes.col(k) * (d.dot(box.axes.col(k)) >= 0 ? 1 : -1) * box.half_extents[k];
-      return p;
-    };
+    auto support = [&box](const Vec3& d) { return obb_support(box, d); };
     ContactRequest request;
     request.margin = 0.05;
     request.two_sided = random.chance(0.5);

@@ -430,11 +430,12 @@ TEST(PackedTree, AnyTreeHoldsThePackedFormForAabb) {
   EXPECT_EQ(AnyTree::build(mesh, parse_method("obb-min")).packed(), nullptr);
 }
 
-// The oriented box's leaf test takes the box's frame once per query (geometry.cpp,
-// detail::ObbTriangleTest) and must answer as triangle_overlaps_obb does to the bit, also for
-// boxes that only just touch a facet: axis-aligned boxes with a face through a vertex (exact
-// contact), and turned boxes grown or shrunk by a few ulps around a vertex.
-TEST(PackedTree, ObbLeafTestIsTriangleOverlapsObb) {
+// Oriented boxes that only just touch facets: axis-aligned boxes with a face through a vertex
+// (exact contact), and turned boxes grown or shrunk by a few ulps around a vertex. The packed
+// walk (quantized node boxes, the box's frame taken once per query) must report exactly the
+// facets that triangle_overlaps_obb accepts, never losing one to its node culling, and those
+// facets must be the independent oracle's (brute_force.h).
+TEST(PackedTree, ObbQueryTouchingVerticesIsTriangleOverlapsObb) {
   const TriangleMesh terrain = make_terrain(24, 24, 5, 24, 3);
   const PackedAabbTree packed(build_tree<Aabb>(terrain));
   const auto reference = [&](const Obb& box) {
@@ -466,6 +467,7 @@ TEST(PackedTree, ObbLeafTestIsTriangleOverlapsObb) {
     }
     const std::vector<FacetId> expected = reference(box);
     EXPECT_EQ(query_overlap(packed, box), expected) << "box " << i;
+    EXPECT_EQ(violations(expected, brute_overlap(terrain, box)), "") << "box " << i;
     reported += expected.size();
   }
   EXPECT_GT(reported, 0u);

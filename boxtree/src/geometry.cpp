@@ -527,11 +527,7 @@ bool triangle_overlaps_aabb(const Vec3& a, const Vec3& b, const Vec3& c, const A
 }
 
 bool triangle_overlaps_obb(const Vec3& a, const Vec3& b, const Vec3& c, const Obb& box) {
-  // In the box frame the box is axis-aligned; rotations keep the test's answer.
-  const Mat3 box_from_world = box.axes.transpose();
-  const Aabb local{-box.half_extents, box.half_extents};
-  return triangle_overlaps_aabb(box_from_world * (a - box.center), box_from_world * (b - box.center),
-                                box_from_world * (c - box.center), local);
+  return detail::ObbTriangleTest(box)(a, b, c);
 }
 
 namespace detail {
@@ -547,9 +543,9 @@ bool ObbTriangleTest::operator()(const Vec3& a, const Vec3& b, const Vec3& c) co
   if (!valid_)
     return triangle_overlaps_aabb(box_from_world_ * (a - center_), box_from_world_ * (b - center_),
                                   box_from_world_ * (c - center_), local_);
-  // The corners in the box's frame a coordinate at a time, each tried on its face axis at once:
-  // most leaves that fail are apart along a face axis. Each coordinate is the row's dot product,
-  // the same sums in the same order as the matrix product of triangle_overlaps_obb.
+  // In the box's frame the box is axis-aligned (a rotation keeps the answer). The corners are
+  // taken there a coordinate at a time, each tried on its face axis at once: most leaves that fail
+  // are apart along a face axis.
   const Vec3 da = a - center_;
   const Vec3 db = b - center_;
   const Vec3 dc = c - center_;

@@ -23,9 +23,9 @@ bool boxes_overlap(const Vec3& ha, const Vec3& t, const Mat3& r, const Vec3& hb)
 // corners without NaN (not checked). Defined in geometry.cpp.
 bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Aabb& box);
 
-// triangle_overlaps_obb for one box against many triangles (a query's leaf tests): the box's frame
-// and validity are taken once. The same arithmetic, so the same answers to the bit. Defined in
-// geometry.cpp.
+// The triangle / oriented box test with the box's frame and validity taken once, for one box
+// against many triangles (a query's leaf tests); triangle_overlaps_obb is this applied to one
+// triangle. Defined in geometry.cpp.
 class ObbTriangleTest {
  public:
   explicit ObbTriangleTest(const Obb& box);
