@@ -430,6 +430,42 @@ TEST(PackedTree, AnyTreeHoldsThePackedFormForAabb) {
   EXPECT_EQ(AnyTree::build(mesh, parse_method("obb-min")).packed(), nullptr);
 }
 
+// Spheres that only just touch facets: centred off a terrain vertex with the radius that reaches
+// it, grown or shrunk by a few ulps, and spheres centred far outside the tree's grid (more than
+// 2^17 grid steps away: the walk's single-precision sphere test stands aside there). The packed
+// walk (its node test in float on the grid) must report exactly the facets that
+// triangle_overlaps_sphere accepts, never losing one to its node culling, and those facets must
+// be the independent oracle's (brute_force.h).
+TEST(PackedTree, SphereQueryTouchingVerticesIsTriangleOverlapsSphere) {
+  const TriangleMesh terrain = make_terrain(24, 24, 5, 24, 3);
+  const PackedAabbTree packed(build_tree<Aabb>(terrain));
+  const auto reference = [&](const Sphere& sphere) {
+    std::vector<FacetId> out;
+    for (FacetId f = 0; f < terrain.facet_count(); ++f)
+      if (triangle_overlaps_sphere(terrain.corner(f, 0), terrain.corner(f, 1), terrain.corner(f, 2), sphere))
+        out.push_back(f);
+    return out;
+  };
+  Random r(23);
+  std::size_t reported = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Vec3& vertex = terrain.vertices[r.next() % terrain.vertices.size()];
+    const Real dx = r.uniform(-1, 1);
+    const Real dy = r.uniform(-1, 1);
+    const Real dz = r.uniform(0.2, 1);
+    // Far ones: 1e4 m away on a 24 m terrain (the grid step is ~1 mm: 1e7 steps).
+    const Real reach = i % 4 == 3 ? 1e4 : r.uniform(0.05, 3.0);
+    const Vec3 center = vertex + Vec3(dx, dy, dz).normalized() * reach;
+    const Real ulps = r.uniform(-4, 4);
+    const Sphere sphere{center, (center - vertex).norm() * (1 + ulps * std::numeric_limits<Real>::epsilon())};
+    const std::vector<FacetId> expected = reference(sphere);
+    EXPECT_EQ(query_overlap(packed, sphere), expected) << "sphere " << i;
+    EXPECT_EQ(violations(expected, brute_overlap(terrain, sphere)), "") << "sphere " << i;
+    reported += expected.size();
+  }
+  EXPECT_GT(reported, 400u);
+}
+
 // Oriented boxes that only just touch facets: axis-aligned boxes with a face through a vertex
 // (exact contact), and turned boxes grown or shrunk by a few ulps around a vertex. The packed
 // walk (quantized node boxes, the box's frame taken once per query) must report exactly the

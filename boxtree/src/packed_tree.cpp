@@ -333,6 +333,67 @@ struct GridObbAxes {
   }
 };
 
+// A sphere against four children at once, in single precision on the grid: child c is apart
+// when the distance from the centre to its box exceeds the radius. Per axis the gap in grid steps
+// is max(lo - c, c - hi, 0), c the centre on the grid; lo and hi are exact in float, c (kept
+// within 2^17 steps of the origin) rounds by at most 2^-8 steps and each difference by 2^-7, so
+// each gap is taken 2^-5 steps smaller, a lower bound of the true gap; the squared world distance
+// from those gaps rounds by a few float ulps, which `reach2` allows for (64 ulps of r^2). So the
+// test never culls a child whose true box the sphere touches. Disabled (every child passes) for
+// centres farther from the grid or radii that float cannot hold.
+struct GridSphere {
+  bool enabled = false;
+  float center[3] = {};  // on the grid
+  float step[3] = {};    // world length of a grid step per axis
+  float reach2 = 0;      // squared radius, padded
+
+  GridSphere(const PackedAabbTree& tree, const Sphere& sphere) {
+    bool finite = std::isfinite(sphere.radius) && sphere.radius < Real(1e18);
+    for (int i = 0; i < 3; ++i) {
+      const Real c = (sphere.center[i] - tree.origin()[i]) * tree.inv_step()[i];
+      finite = finite && std::isfinite(c) && std::abs(c) < Real(131072) && tree.step()[i] < Real(1e18);
+      center[i] = float(c);
+      step[i] = float(tree.step()[i]);
+    }
+    const Real r2 = sphere.radius * sphere.radius;
+    reach2 = float(r2 * (1 + 64 * Real(std::numeric_limits<float>::epsilon())));
+    enabled = finite && std::isfinite(reach2);
+  }
+
+  unsigned overlaps(const PackedAabbTree::Node& node, unsigned mask) const {
+    if (!enabled || mask == 0) return mask;
+    constexpr float kSlack = 1.0f / 32;
+#if defined(__SSE2__)
+    const __m128i zero = _mm_setzero_si128();
+    const auto lanes = [&](const std::uint16_t* p) {
+      return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero));
+    };
+    __m128 distance2 = _mm_setzero_ps();
+    for (int i = 0; i < 3; ++i) {
+      const __m128 c = _mm_set1_ps(center[i]);
+      const __m128 below = _mm_sub_ps(lanes(node.min[i]), c);  // > 0: the centre is below the box
+      const __m128 above = _mm_sub_ps(c, lanes(node.max[i]));  // > 0: the centre is above it
+      const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_max_ps(below, above), _mm_set1_ps(kSlack)), _mm_setzero_ps());
+      const __m128 world = _mm_mul_ps(gap, _mm_set1_ps(step[i]));
+      distance2 = _mm_add_ps(distance2, _mm_mul_ps(world, world));
+    }
+    return mask & ~unsigned(_mm_movemask_ps(_mm_cmpgt_ps(distance2, _mm_set1_ps(reach2))));
+#else
+    for (int c = 0; c < kWidth; ++c) {
+      if (!(mask >> c & 1u)) continue;
+      float distance2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        const float below = float(node.min[i][c]) - center[i], above = center[i] - float(node.max[i][c]);
+        const float gap = std::max(std::max(below, above) - kSlack, 0.0f);
+        distance2 += (gap * step[i]) * (gap * step[i]);
+      }
+      if (distance2 > reach2) mask &= ~(1u << c);
+    }
+    return mask;
+#endif
+  }
+};
+
 // Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c; never
 // set for an empty slot);
 // `leaf(facet)` returns false to stop. The caller has tested the root's volume (the exact bounds).
@@ -836,11 +897,18 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
         },
         leaf, sink.local);
   } else {
-    // Spheres: the exact box test (a distance) on the children that pass.
+    // Spheres: the distance to four children at once, in float on the grid (GridSphere); a leaf
+    // child gets the exact box test only when the caller asked for leaf volumes, since the
+    // triangle test decides otherwise.
+    const GridSphere sphere(tree, shape);
     walk(
         tree,
         [&](const PackedAabbTree::Node& node) {
-          return refine_mask(tree, node, grid.overlaps(node), [&](const Aabb& box) { return overlaps(box, shape); });
+          const unsigned mask = sphere.overlaps(node, grid.overlaps(node));
+          if (test == FacetTest::exact_triangle) return mask;
+          const unsigned leaves = mask & leaf_slots(node);
+          return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
+                 (mask & ~leaves);
         },
         leaf, sink.local);
   }
