@@ -189,19 +189,40 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
   }
 
   if (push_out) {
-    // Behind a one-sided triangle: the least lift along n that clears it, by bisection on the
-    // exact overlap test (the lifts that overlap form an interval containing 0, since the
-    // capsule moved along a line sweeps a convex set).
+    // Behind a one-sided triangle: the least lift t along n that clears it. The distance g(t)
+    // from the lifted core to the triangle is convex in t (the distance of two convex sets as one
+    // translates), so the lifts that overlap (g < r) form an interval containing 0, and t is its
+    // upper end. Newton's method on g - r from a lift that clears stays above t (the tangent of a
+    // convex function lies below it) and decreases to it; g'(t) is n . (x - y) / g for the
+    // closest pair (x, y). Bisection on the exact overlap test finishes what Newton has not
+    // within its steps (a closest pair switching features at t converges only linearly).
     if (distance > r) return 0;
-    const auto overlaps_at = [&](Real t) {
-      const Vec3 lift = t * tri.normal;
-      return segment_triangle_distance_squared(p0 + lift, p1 + lift, a, b, c) <= r * r;
-    };
-    Real lo = 0;
     Real hi = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
-    for (int iteration = 0; iteration < 200 && hi - lo > tiny; ++iteration) {
-      const Real mid = (lo + hi) / 2;
-      (overlaps_at(mid) ? lo : hi) = mid;
+    bool converged = false;
+    for (int iteration = 0; iteration < 16 && !converged; ++iteration) {
+      const SegmentTrianglePair at = closest_segment_triangle(p0 + hi * tri.normal, p1 + hi * tri.normal, tri);
+      const Real g = std::sqrt(at.distance_squared);
+      if (!(g > r + tiny)) {
+        converged = g >= r - tiny;  // at the answer to rounding; below it, Newton went past
+        break;
+      }
+      const Real slope = tri.normal.dot(at.on_segment - at.on_triangle) / g;
+      if (!(slope > 0)) break;
+      const Real step = (g - r) / slope;
+      hi -= step;
+      converged = step <= tiny;
+    }
+    if (!converged) {
+      const auto overlaps_at = [&](Real t) {
+        const Vec3 lift = t * tri.normal;
+        return segment_triangle_distance_squared(p0 + lift, p1 + lift, a, b, c) <= r * r;
+      };
+      Real lo = 0;
+      if (!(hi >= 0) || overlaps_at(hi)) hi = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
+      for (int iteration = 0; iteration < 200 && hi - lo > tiny; ++iteration) {
+        const Real mid = (lo + hi) / 2;
+        (overlaps_at(mid) ? lo : hi) = mid;
+      }
     }
     const Vec3 lift = hi * tri.normal;
     const SegmentTrianglePair touch = closest_segment_triangle(p0 + lift, p1 + lift, tri);
