@@ -999,6 +999,37 @@ TEST(GeometrySegmentTriangleDistance, MatchesSamplingAndDrivesCapsuleTest) {
   }
 }
 
+// triangle_overlaps_capsule stops early and rejects by separating planes first (the triangle's
+// own and its three edge walls); neither may change its answer from "the distance is within the
+// radius", also when the capsule only just touches: radii at the distance to a few ulps, on
+// random triangles, needles and segments seen from every side.
+TEST(GeometrySegmentTriangleDistance, CapsuleTestIsTheDistanceAtTheRadius) {
+  Random rng(73);
+  int touching = 0, apart = 0;
+  for (int i = 0; i < scaled(20000); ++i) {
+    std::array<Vec3, 3> t;
+    t[0] = rng.point(-2, 2);
+    t[1] = rng.point(-2, 2);
+    t[2] = rng.point(-2, 2);
+    if (i % 7 == 0) {  // a needle
+      const Real along = rng.uniform(0, 1);
+      const Vec3 off = rng.point(-1e-7, 1e-7);
+      t[2] = t[0] + (t[1] - t[0]) * along + off;
+    }
+    const Vec3 p0 = rng.point(-3, 3);
+    const Vec3 p1 = rng.chance(0.1) ? p0 : rng.point(-3, 3);
+    const Real distance = std::sqrt(segment_triangle_distance_squared(p0, p1, t[0], t[1], t[2]));
+    const Real ulps = Real(rng.integer(-4, 4));
+    const Real radius =
+        i % 2 == 0 ? distance * (1 + ulps * std::numeric_limits<Real>::epsilon()) : distance * rng.uniform(0.5, 1.5);
+    const bool expected = segment_triangle_distance_squared(p0, p1, t[0], t[1], t[2]) <= radius * radius;
+    ASSERT_EQ(triangle_overlaps_capsule(t[0], t[1], t[2], Capsule{p0, p1, radius}), expected) << i;
+    (expected ? touching : apart) += 1;
+  }
+  EXPECT_GT(touching, scaled(20000) / 5);
+  EXPECT_GT(apart, scaled(20000) / 5);
+}
+
 // ==========================================================================================
 // Box / box in two frames, box / OBB
 

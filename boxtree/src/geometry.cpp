@@ -570,11 +570,54 @@ bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const
          sphere.radius * sphere.radius;
 }
 
+namespace {
+
+// A quick rejection for triangle_overlaps_capsule, which most of a query's leaf tests end in:
+// planes that separate the triangle from the capsule. A well-shaped triangle lies on the inner
+// side of its own plane (either side) and of the three planes through an edge perpendicular to
+// it; the capsule is apart when both ends of its core lie beyond one of them by more than the
+// radius. The radius is taken larger (squared: by 4e-9 of r^2 and 2e-9 of the squared size of
+// the triangle and of the ends' offsets), far above the rounding of these products, so a capsule
+// that touches the triangle is never rejected here (the exact distance decides). Needles and
+// degenerate triangles (whose computed normal may point anywhere) are left to the distance.
+Real segment_triangle_distance_squared_until(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
+                                             const Vec3& c, Real enough);  // Distances, below
+
+bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
+  const Vec3 e[3] = {b - a, c - b, a - c};
+  const Vec3 n = e[0].cross(c - a);
+  const Real n2 = n.squaredNorm();
+  const Real l0 = e[0].squaredNorm();
+  const Real l2 = e[2].squaredNorm();
+  if (!(n2 > Real(1e-6) * l0 * l2)) return false;
+  const Vec3 d0 = capsule.p0 - a;
+  const Vec3 d1 = capsule.p1 - a;
+  const Real size2 = std::max({d0.squaredNorm(), d1.squaredNorm(), l0, e[1].squaredNorm(), l2});
+  const Real reach2 = capsule.radius * capsule.radius * Real(1 + 4e-9) + Real(2e-9) * size2;
+  // The triangle's plane: both ends on one side, farther than the radius.
+  const Real s0 = n.dot(d0);
+  const Real s1 = n.dot(d1);
+  if (((s0 > 0 && s1 > 0) || (s0 < 0 && s1 < 0)) && std::min(s0 * s0, s1 * s1) > reach2 * n2) return true;
+  // The edge planes: m = e x n points away from the triangle (for either winding of n).
+  const Vec3* corner[3] = {&a, &b, &c};
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 m = e[i].cross(n);
+    const Real t0 = m.dot(capsule.p0 - *corner[i]);
+    const Real t1 = m.dot(capsule.p1 - *corner[i]);
+    if (t0 > 0 && t1 > 0 && std::min(t0 * t0, t1 * t1) > reach2 * m.squaredNorm()) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
   // A NaN end would make every orientation test of segment_meets_triangle false, i.e. "meets";
   // d^2 <= r^2 alone would let a negative radius act as its magnitude.
   if (!is_valid(capsule)) return false;
-  return segment_triangle_distance_squared(capsule.p0, capsule.p1, a, b, c) <= capsule.radius * capsule.radius;
+  if (capsule_beyond_a_triangle_plane(a, b, c, capsule)) return false;
+  const Real r2 = capsule.radius * capsule.radius;
+  return segment_triangle_distance_squared_until(capsule.p0, capsule.p1, a, b, c, r2) <= r2;
 }
 
 bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane) {
@@ -687,7 +730,12 @@ Real segment_segment_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3
   return (on_p - on_q).squaredNorm();
 }
 
-Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c) {
+namespace {
+
+// segment_triangle_distance_squared, or a candidate at most `enough` as soon as one is found (so
+// the answer is <= enough exactly when the distance is): a test against a radius stops early.
+Real segment_triangle_distance_squared_until(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
+                                             const Vec3& c, Real enough) {
   // Zero if the segment meets the triangle. Otherwise the closest pair has a segment end on one
   // side or a triangle edge on the other (the interior of each cannot both be closest), so the
   // distance is the least of two point/triangle and three segment/segment distances. A degenerate
@@ -699,11 +747,20 @@ Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec
     return 0;
   }
   Real best = (closest_point_on_triangle(p0, a, b, c) - p0).squaredNorm();
+  if (best <= enough) return best;
   best = std::min(best, (closest_point_on_triangle(p1, a, b, c) - p1).squaredNorm());
+  if (best <= enough) return best;
   best = std::min(best, segment_segment_distance_squared(p0, p1, a, b));
+  if (best <= enough) return best;
   best = std::min(best, segment_segment_distance_squared(p0, p1, b, c));
-  best = std::min(best, segment_segment_distance_squared(p0, p1, c, a));
-  return best;
+  if (best <= enough) return best;
+  return std::min(best, segment_segment_distance_squared(p0, p1, c, a));
+}
+
+}  // namespace
+
+Real segment_triangle_distance_squared(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c) {
+  return segment_triangle_distance_squared_until(p0, p1, a, b, c, Real(-1));  // distances are >= 0: no early stop
 }
 
 // ---------------------------------------------------------------------------------------------
