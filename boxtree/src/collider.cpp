@@ -538,7 +538,9 @@ void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const
   if (request.early_stop) {
     // Any contacts will do: taken as the walk finds them, and the walk stops at enough.
     if (cache) cache->clear();
-    mine->collide(*theirs, pose, contacts_of);
+    QueryStats stats;
+    mine->collide(*theirs, pose, contacts_of, &stats);
+    result.counts.volume_tests += stats.volume_tests;
     reduce(request, result);
     return;
   }
@@ -551,6 +553,7 @@ void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const
     pairs.push_back(pair);
     return true;
   };
+  QueryStats stats;
   const bool coherent = cache && request.coherence && mine->packed() && theirs->packed();
   if (coherent) {
     if (cache->mine_.identity() != mine->identity() || cache->theirs_.identity() != theirs->identity()) {
@@ -558,11 +561,12 @@ void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const
       cache->mine_ = *mine;
       cache->theirs_ = *theirs;
     }
-    collide(*mine->packed(), *theirs->packed(), pose, cache->front_, keep);
+    collide(*mine->packed(), *theirs->packed(), pose, cache->front_, keep, &stats);
   } else {
     if (cache) cache->clear();
-    mine->collide(*theirs, pose, keep);
+    mine->collide(*theirs, pose, keep, &stats);
   }
+  result.counts.volume_tests += stats.volume_tests;
   std::sort(pairs.begin(), pairs.end());
   for (const FacetPair& pair : pairs) contacts_of(pair);
   reduce(request, result);

@@ -55,6 +55,7 @@ struct CollisionCounts {
   std::size_t edge_discarded = 0;   // dropped on an inactive edge (the neighbour facet reports it)
   std::size_t merged = 0;           // merged into a deeper near-duplicate by the reduction
   std::size_t dropped = 0;          // left out by the reduction (or by early_stop)
+  std::size_t volume_tests = 0;     // mesh vs mesh: volume pairs the tree walk tested
   bool two_sided_fallback = false;  // one-sided asked, but the mesh's winding is inconsistent
   bool invalid_input = false;       // a non-finite pose or an invalid shape: nothing was done
 };

@@ -38,6 +38,11 @@ struct AlgorithmSettings {
   // How two meshes' intersecting facet pairs become contacts (boxtree/collider.h). Face normals
   // by default: chosen by measurement (bench/results/mesh_contacts.txt).
   MeshContactPolicy meshContacts = MeshContactPolicy::face_normals;
+  // Mesh vs mesh with temporal coherence (boxtree/collider.h's MeshPairCache): each pair's
+  // algorithm keeps the front of its last tree walk (at most 256 KiB, freed with the pair) and
+  // starts the next step from it. The contacts are the same bit for bit; off: a fresh descent
+  // every step.
+  bool meshCoherence = true;
 };
 
 void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const AlgorithmSettings& settings = {});
