@@ -13,10 +13,14 @@ namespace {
 using Record = CollideFront::Record;
 constexpr int kWidth = PackedAabbTree::kWidth;
 constexpr std::uint32_t kRoot = 0xFFFFFFFFu;  // the root's reference; else inner node * kWidth + slot
-// Record marks: an inner record (the descent went through the pair; its children follow in
-// preorder), and a leaf pair whose boxes overlapped (its facets are tested on every call).
-constexpr Real kInner = std::numeric_limits<Real>::infinity();
+// Record marks in place of an expiry: an inner record (the descent went through the pair; its
+// children follow in preorder), by which tree it split (a cut record's expiry, the motion so far
+// plus a finite distance, is never either), and a leaf pair whose facets may touch (tested on
+// every call).
+constexpr Real kInnerSplitA = std::numeric_limits<Real>::infinity();
+constexpr Real kInnerSplitB = std::numeric_limits<Real>::max();
 constexpr Real kAlways = -std::numeric_limits<Real>::infinity();
+bool is_inner(const Record& r) { return r.expiry == kInnerSplitA || r.expiry == kInnerSplitB; }
 
 std::uint32_t link_of(const PackedAabbTree& tree, std::uint32_t ref) {
   if (ref == kRoot) return tree.root_link();
@@ -85,20 +89,49 @@ struct FrontWalk {
     return std::max(along_a.maxCoeff(), along_b.maxCoeff()) - pad;
   }
 
-  // The pair's children in the test tree: the larger box's children against the other node (as
-  // the fresh descent splits; the boxes are fixed in their trees, so this never changes). Returns
-  // how many, in `child` (node references of the split tree) and whether a was split.
-  int children(std::uint32_t x, std::uint32_t y, std::uint32_t link_x, std::uint32_t link_y, std::uint32_t* child,
-               bool* split_a) const {
+  // Whether the pair's children in the test tree are the children of its node of a (else of its
+  // node of b): the larger box is split, as in the fresh descent (the boxes are fixed in their
+  // trees, so this never changes).
+  bool splits_a(std::uint32_t x, std::uint32_t y, std::uint32_t link_x, std::uint32_t link_y) const {
     const bool leaf_x = PackedAabbTree::is_leaf(link_x);
     const bool leaf_y = PackedAabbTree::is_leaf(link_y);
-    *split_a = !leaf_x && (leaf_y || surface_area(box_of(a, x)) >= surface_area(box_of(b, y)));
-    const std::uint32_t link = *split_a ? link_x : link_y;
-    const PackedAabbTree::Node& node = (*split_a ? a : b).nodes()[link];
+    return !leaf_x && (leaf_y || surface_area(box_of(a, x)) >= surface_area(box_of(b, y)));
+  }
+  // The children (node references in the split tree) of the split node `link`; returns how many.
+  static int children(const PackedAabbTree& tree, std::uint32_t link, std::uint32_t* child) {
+    const PackedAabbTree::Node& node = tree.nodes()[link];
     int count = 0;
     for (int slot = 0; slot < kWidth; ++slot)
       if (node.link[slot] != PackedAabbTree::kEmpty) child[count++] = link * kWidth + std::uint32_t(slot);
     return count;
+  }
+
+  // A lower bound of the distance between facet fa and facet fb (moved into a's frame), less the
+  // pad: their separation along either facet's normal (-infinity for degenerate facets).
+  Real facet_distance_bound(FacetId fa, FacetId fb) const {
+    const TriangleMesh& ma = a.mesh();
+    const TriangleMesh& mb = b.mesh();
+    const Vec3 pa[3] = {ma.corner(fa, 0), ma.corner(fa, 1), ma.corner(fa, 2)};
+    const Vec3 pb[3] = {a_from_b.apply(mb.corner(fb, 0)), a_from_b.apply(mb.corner(fb, 1)),
+                        a_from_b.apply(mb.corner(fb, 2))};
+    Real best = -std::numeric_limits<Real>::infinity();
+    const auto along_normal = [&](const Vec3* own, const Vec3* other) {
+      const Vec3 normal = (own[1] - own[0]).cross(own[2] - own[0]);
+      const Real length = normal.norm();
+      if (!(length > 0)) return;
+      const Vec3 n = normal / length;
+      const Real plane = n.dot(own[0]);
+      Real lo = std::numeric_limits<Real>::infinity(), hi = -lo;
+      for (int k = 0; k < 3; ++k) {
+        const Real h = n.dot(other[k]) - plane;
+        lo = std::min(lo, h);
+        hi = std::max(hi, h);
+      }
+      best = std::max(best, std::max(lo, -hi));
+    };
+    along_normal(pa, pb);
+    along_normal(pb, pa);
+    return best - pad;
   }
 
   // A pair met in this call: its volumes tested, and descended from if they may overlap.
@@ -114,16 +147,27 @@ struct FrontWalk {
       const FacetId fa = PackedAabbTree::facet(link_x);
       const FacetId fb = PackedAabbTree::facet(link_y);
       ++stats.leaf_tests;
-      if (detail::facets_intersect(a.mesh(), fa, b.mesh(), fb, a_from_b) && !visit(FacetPair{fa, fb})) stopped = true;
+      if (detail::facets_intersect(a.mesh(), fa, b.mesh(), fb, a_from_b)) {
+        if (!visit(FacetPair{fa, fb})) stopped = true;
+        emit(x, y, kAlways);
+        return {false, true};
+      }
+      // Apart facets in overlapping boxes (most leaf pairs of a resting contact): kept apart by
+      // their own distance, so that they are not tested again while the motion stays below it.
+      const Real facets_apart = facet_distance_bound(fa, fb);
+      if (facets_apart > 0) {
+        emit(x, y, travel + facets_apart);
+        return {true, true};
+      }
       emit(x, y, kAlways);
       return {false, true};
     }
     ++front_stats.descended;
     ++stats.nodes_visited;
-    emit(x, y, kInner);
+    const bool split_a = splits_a(x, y, link_x, link_y);
+    emit(x, y, split_a ? kInnerSplitA : kInnerSplitB);
     std::uint32_t child[kWidth];
-    bool split_a = false;
-    const int count = children(x, y, link_x, link_y, child, &split_a);
+    const int count = children(split_a ? a : b, split_a ? link_x : link_y, child);
     for (int i = 0; i < count && !stopped; ++i) {
       if (split_a) {
         test(child[i], y);
@@ -138,7 +182,7 @@ struct FrontWalk {
   Outcome resume() {
     const Record r = in[next++];
     ++stats.nodes_visited;
-    if (r.expiry != kInner) {
+    if (!is_inner(r)) {
       if (r.expiry != kAlways && travel < r.expiry) {
         ++front_stats.kept_apart;
         emit(r.a, r.b, r.expiry);
@@ -148,10 +192,10 @@ struct FrontWalk {
       return test(r.a, r.b);
     }
     const std::size_t at = out.size();
-    emit(r.a, r.b, kInner);
+    emit(r.a, r.b, r.expiry);
+    const bool split_a = r.expiry == kInnerSplitA;
     std::uint32_t child[kWidth];
-    bool split_a = false;
-    const int count = children(r.a, r.b, link_of(a, r.a), link_of(b, r.b), child, &split_a);
+    const int count = split_a ? children(a, link_of(a, r.a), child) : children(b, link_of(b, r.b), child);
     bool apart = true, tested = false;
     for (int i = 0; i < count; ++i) {
       if (stopped) return {false, true};
@@ -192,7 +236,7 @@ void CollideFront::clear() {
 
 std::size_t CollideFront::cut_size() const {
   std::size_t n = 0;
-  for (const Record& r : records_) n += r.expiry != kInner;
+  for (const Record& r : records_) n += !is_inner(r);
   return n;
 }
 
