@@ -137,6 +137,9 @@ TEST(OdeCoherence, PairEntriesEvictedUnseenAndOnDestroy) {
   dGeomID b = dCreateBoxtreeMesh(nullptr, rock, "aabb");
   dGeomID c = dCreateBoxtreeMesh(nullptr, rock, "aabb");
   dGeomID d = dCreateBoxtreeMesh(nullptr, rock, "aabb");
+  ode::GeomSettings settings;
+  settings.mesh_coherence = true;  // off by default
+  for (dGeomID g : {a, b, c, d}) ode::set_geom_settings(g, settings);
   dGeomSetPosition(b, 1.5, 0, 0);
   dGeomSetPosition(c, 10, 0, 0);
   dGeomSetPosition(d, 11.5, 0, 0);

@@ -13,7 +13,10 @@
 //     the distance between the two volumes, and the call keeps the distance every point of b's
 //     volumes may have moved in a's frame since (the sum of each call's bound): while that motion
 //     is below the pair's distance, the pair is still apart and is not tested again (the "apart
-//     pairs re-checked cheaply" of a resting pile). Otherwise its volumes are tested again;
+//     pairs re-checked cheaply" of a resting pile). Otherwise its volumes are tested again. A
+//     leaf pair whose facets do not intersect is kept the same way, by the facets' separation
+//     along either facet's normal (most leaf pairs of a resting contact), so that its exact test
+//     is not repeated either;
 //   - a pair that now overlaps is descended from, as in a fresh descent; the pairs where that
 //     descent stops join the front;
 //   - where every child of a pair is apart, one of them was tested in this call, and the pair
@@ -36,6 +39,13 @@
 // For the packed aabb form (packed_tree.h), which AnyTree holds for the `aabb` method (the
 // engine adapters' default); the other layouts have no front (collider.h's collide_meshes
 // descends fresh for them).
+//
+// Cost, measured (bench/sim/mesh_pile.cpp, 50 resting meshes of ~270 facets on a 32k-facet bowl,
+// bodies awake): volume tests per step 0.06x a fresh descent's in ODE, 0.37x in Bullet (whose
+// resting meshes jitter more, so more records expire), but collision time 1.2x and 1.8x: every
+// record of the front is visited on every call (~250 per pair there), and that costs more than
+// the packed walk's four-boxes-at-once culling saves. Skipping whole subtrees of records that
+// are all still apart would be the next step. The engine adapters leave it off by default.
 #include <cstdint>
 #include <vector>
 
