@@ -441,8 +441,15 @@ void collide_half_space(const CollisionMesh& mesh, const Plane& plane, const Con
   reduce(request, result);
 }
 
+void MeshPairCache::clear() {
+  front_.clear();
+  mine_ = {};
+  theirs_ = {};
+  pairs_.clear();
+}
+
 void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const RigidTransform& mesh_from_other,
-                    const MeshContactRequest& request, ContactResult& result) {
+                    const MeshContactRequest& request, ContactResult& result, MeshPairCache* cache) {
   if (!finite(mesh_from_other) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -482,7 +489,8 @@ void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const
   const std::vector<std::uint8_t>& their_edges = other.active_edges();
   const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
   ContactPoint found[std::max(kMaxTriangleTriangleContacts, kMaxTriangleFaceContacts)];
-  mine->collide(*theirs, pose, [&](const FacetPair& pair) {
+  // The contacts of one intersecting facet pair; false once early_stop has its contacts.
+  const auto contacts_of = [&](const FacetPair& pair) {
     ++result.counts.candidates;
     // Triangle a of the routines is the other's, b is mine: normals from mine towards the other,
     // positions on mine.
@@ -525,7 +533,42 @@ void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const
       result.contacts.push_back(c);
     }
     return !(request.early_stop && result.contacts.size() >= max_contacts);
-  });
+  };
+
+  if (request.early_stop) {
+    // Any contacts will do: taken as the walk finds them, and the walk stops at enough.
+    if (cache) cache->clear();
+    QueryStats stats;
+    mine->collide(*theirs, pose, contacts_of, &stats);
+    result.counts.volume_tests += stats.volume_tests;
+    reduce(request, result);
+    return;
+  }
+  // Every intersecting facet pair first, then their contacts in sorted order: the same contacts
+  // whatever order the walk (fresh or from a front) found the pairs in.
+  thread_local std::vector<FacetPair> scratch;
+  std::vector<FacetPair>& pairs = cache ? cache->pairs_ : scratch;
+  pairs.clear();
+  const auto keep = [&](const FacetPair& pair) {
+    pairs.push_back(pair);
+    return true;
+  };
+  QueryStats stats;
+  const bool coherent = cache && request.coherence && mine->packed() && theirs->packed();
+  if (coherent) {
+    if (cache->mine_.identity() != mine->identity() || cache->theirs_.identity() != theirs->identity()) {
+      cache->front_.clear();
+      cache->mine_ = *mine;
+      cache->theirs_ = *theirs;
+    }
+    collide(*mine->packed(), *theirs->packed(), pose, cache->front_, keep, &stats);
+  } else {
+    if (cache) cache->clear();
+    mine->collide(*theirs, pose, keep, &stats);
+  }
+  result.counts.volume_tests += stats.volume_tests;
+  std::sort(pairs.begin(), pairs.end());
+  for (const FacetPair& pair : pairs) contacts_of(pair);
   reduce(request, result);
 }
 

@@ -24,6 +24,12 @@ struct SimOptions {
   // Mesh-vs-mesh contact policy of the boxtree adapters (boxtree/collider.h): "triangle-pairs",
   // "face-normals", or empty for each adapter's default.
   std::string mesh_contacts;
+  // Mesh vs mesh with temporal coherence in the boxtree adapters (Bullet's
+  // AlgorithmSettings::meshCoherence, ODE's GeomSettings::mesh_coherence; both off by default).
+  bool mesh_coherence = false;
+  // Bodies at rest may sleep (Bullet's deactivation, ODE's auto-disable), after which their pairs
+  // are not collided. Off: every body stays awake (benchmarks of resting piles).
+  bool sleeping = true;
 };
 
 class Simulation {
@@ -44,6 +50,9 @@ class Simulation {
   // ODE builtin: the triangles OPCODE hands to the colliders (dGeomTriMeshSetCallback); boxtree:
   // the candidate facets of every boxtree geom.
   virtual std::uint64_t narrowphase_triangles() const = 0;
+  // Volume pairs tested so far by the boxtree adapters' mesh-vs-mesh tree walks (0 for the
+  // built-in midphase).
+  virtual std::uint64_t mesh_volume_tests() const { return 0; }
   // Collision time split by the kind of pair, for the benchmarks: one entry per pair kind seen so
   // far ("terrain-box", ..., "body-body"), in a fixed order. ODE: the time of each dCollide call
   // made by the near callback (the hash space's own work is outside all of them). Bullet: the time

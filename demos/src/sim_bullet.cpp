@@ -157,6 +157,7 @@ class BulletSimulation final : public Simulation {
       if (!options.mesh_contacts.empty())
         settings.meshContacts = options.mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
                                                                         : boxtree::MeshContactPolicy::triangle_pairs;
+      settings.meshCoherence = options.mesh_coherence;
       boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get(), settings);
     }
 #endif
@@ -237,6 +238,7 @@ class BulletSimulation final : public Simulation {
       body_info.m_spinningFriction = 0.02;
       bodies_.push_back(std::make_unique<btRigidBody>(body_info));
       bodies_.back()->setUserIndex(int(spec.shape));  // the pair kind (TimedDispatcher, replays)
+      if (!options.sleeping) bodies_.back()->setActivationState(DISABLE_DEACTIVATION);
       world_->addRigidBody(bodies_.back().get());
     }
   }
@@ -366,6 +368,16 @@ class BulletSimulation final : public Simulation {
         if (const auto* mesh = dynamic_cast<const boxtree::bullet::BoxtreeMeshShape*>(shape.get()))
           mesh_shapes_.push_back(mesh);
     for (const auto* mesh : mesh_shapes_) total += mesh->counters().narrowphase_triangles;
+#endif
+    return total;
+  }
+  std::uint64_t mesh_volume_tests() const override {
+    std::uint64_t total = 0;
+#if BOXTREE_DEMO_HAVE_BULLET_ADAPTER
+    if (boxtree_) {
+      narrowphase_triangles();  // fills mesh_shapes_
+      for (const auto* mesh : mesh_shapes_) total += mesh->counters().mesh_volume_tests;
+    }
 #endif
     return total;
   }

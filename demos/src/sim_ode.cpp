@@ -46,7 +46,8 @@ class OdeSimulation final : public Simulation {
   OdeSimulation(const Scene& scene, const SimOptions& options)
       : boxtree_(options.boxtree_midphase),
         max_contacts_(options.max_contacts_per_pair),
-        mesh_contacts_(options.mesh_contacts) {
+        mesh_contacts_(options.mesh_contacts),
+        mesh_coherence_(options.mesh_coherence) {
     if (max_contacts_ < 1 || max_contacts_ > kContactBuffer)
       throw boxtree::Error("max_contacts_per_pair must be 1 to " + std::to_string(kContactBuffer));
 #if !BOXTREE_DEMO_HAVE_ODE_ADAPTER
@@ -67,7 +68,7 @@ class OdeSimulation final : public Simulation {
     dWorldSetContactMaxCorrectingVel(world_, 3);
     dWorldSetContactSurfaceLayer(world_, 0.002);
     dWorldSetAngularDamping(world_, 0.02);  // round things would roll across the whole bowl
-    dWorldSetAutoDisableFlag(world_, 1);
+    dWorldSetAutoDisableFlag(world_, options.sleeping ? 1 : 0);
     space_ = dHashSpaceCreate(nullptr);
     dHashSpaceSetLevels(space_, -2, 4);
     contacts_group_ = dJointGroupCreate(0);
@@ -161,6 +162,14 @@ class OdeSimulation final : public Simulation {
 #endif
     return total;
   }
+  std::uint64_t mesh_volume_tests() const override {
+    std::uint64_t total = 0;
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_)
+      for (dGeomID geom : mesh_geoms_) total += boxtree::ode::geom_counters(geom).mesh_volume_tests;
+#endif
+    return total;
+  }
   std::vector<PairKindTime> collision_breakdown() const override {
     std::vector<PairKindTime> out;
     for (int k = 0; k < kPairKinds; ++k) {
@@ -211,12 +220,12 @@ class OdeSimulation final : public Simulation {
     if (boxtree_) {
 #if BOXTREE_DEMO_HAVE_ODE_ADAPTER
       dGeomID geom = dCreateBoxtreeMesh(space_, mesh, method.c_str());
-      if (!mesh_contacts_.empty()) {
-        boxtree::ode::GeomSettings settings = boxtree::ode::geom_settings(geom);
+      boxtree::ode::GeomSettings settings = boxtree::ode::geom_settings(geom);
+      if (!mesh_contacts_.empty())
         settings.mesh_contacts = mesh_contacts_ == "face-normals" ? boxtree::MeshContactPolicy::face_normals
                                                                   : boxtree::MeshContactPolicy::triangle_pairs;
-        boxtree::ode::set_geom_settings(geom, settings);
-      }
+      settings.mesh_coherence = mesh_coherence_;
+      boxtree::ode::set_geom_settings(geom, settings);
       mesh_geoms_.push_back(geom);
       return geom;
 #endif
@@ -328,6 +337,7 @@ class OdeSimulation final : public Simulation {
   bool boxtree_;
   int max_contacts_;
   std::string mesh_contacts_;                    // SimOptions::mesh_contacts
+  bool mesh_coherence_ = false;                  // SimOptions::mesh_coherence
   std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
   PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;

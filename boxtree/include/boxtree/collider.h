@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "boxtree/collide_front.h"
 #include "boxtree/collision_mesh.h"
 #include "boxtree/contact.h"
 #include "boxtree/convex_polyhedron.h"
@@ -54,6 +55,7 @@ struct CollisionCounts {
   std::size_t edge_discarded = 0;   // dropped on an inactive edge (the neighbour facet reports it)
   std::size_t merged = 0;           // merged into a deeper near-duplicate by the reduction
   std::size_t dropped = 0;          // left out by the reduction (or by early_stop)
+  std::size_t volume_tests = 0;     // mesh vs mesh: volume pairs the tree walk tested
   bool two_sided_fallback = false;  // one-sided asked, but the mesh's winding is inconsistent
   bool invalid_input = false;       // a non-finite pose or an invalid shape: nothing was done
 };
@@ -176,6 +178,33 @@ enum class StaticMesh { neither, mesh, other };
 struct MeshContactRequest : ContactRequest {
   MeshContactPolicy policy = MeshContactPolicy::triangle_pairs;
   StaticMesh static_mesh = StaticMesh::neither;
+  // Temporal coherence: with a MeshPairCache given, the tree walk starts from the cache's front
+  // (collide_front.h; what it costs and saves is measured there). Off: the cache is cleared and
+  // every call descends fresh. The contacts are the same either way, bit for bit.
+  bool coherence = true;
+};
+
+// The state one pair of meshes keeps between calls of collide_meshes (one per pair of bodies,
+// freed with the pair): the front of the last tree-vs-tree walk (collide_front.h) and the two
+// trees it belongs to (held, so that a tree cannot die and another take its address while the
+// front refers to it). At most CollideFront's cap in memory (256 KiB by default, measured by
+// memory_bytes()) plus the last call's facet pairs. A call with other meshes, other trees (a
+// mesh of another method converted: CollisionMesh::tree_as) or mesh and other swapped starts
+// afresh; a call with early_stop, with coherence off, or with trees other than the packed `aabb`
+// form on both sides (the front exists for that layout only, the engine adapters' default)
+// descends fresh and clears the front. Not shared between threads.
+class MeshPairCache {
+ public:
+  void clear();
+  const CollideFront& front() const { return front_; }
+  std::size_t memory_bytes() const { return front_.memory_bytes() + pairs_.capacity() * sizeof(FacetPair); }
+
+ private:
+  friend void collide_meshes(const CollisionMesh&, const CollisionMesh&, const RigidTransform&,
+                             const MeshContactRequest&, ContactResult&, MeshPairCache*);
+  AnyTree mine_, theirs_;
+  CollideFront front_;
+  std::vector<FacetPair> pairs_;  // scratch: the call's facet pairs, sorted
 };
 
 // Contacts between `mesh` and `other` placed by `mesh_from_other` (a rotation and translation;
@@ -183,7 +212,10 @@ struct MeshContactRequest : ContactRequest {
 // normals point from `mesh` towards `other`, `facet` is mesh's and `other_facet` other's. Meshes
 // of different methods are walked with a tree of one method built once and kept by the mesh
 // (CollisionMesh::tree_as): never an error. Facet pairs are always two-sided for triangle_pairs.
+// The intersecting facet pairs go to the contact routines in sorted order (without early_stop),
+// so that the contacts do not depend on the order the walk finds them in; with `cache`
+// (MeshPairCache, temporal coherence) the walk starts from the last call's front.
 void collide_meshes(const CollisionMesh& mesh, const CollisionMesh& other, const RigidTransform& mesh_from_other,
-                    const MeshContactRequest& request, ContactResult& result);
+                    const MeshContactRequest& request, ContactResult& result, MeshPairCache* cache = nullptr);
 
 }  // namespace boxtree

@@ -289,10 +289,12 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
     request.static_mesh = w1->getCollisionObject()->isStaticOrKinematicObject()   ? StaticMesh::mesh
                           : w0->getCollisionObject()->isStaticOrKinematicObject() ? StaticMesh::other
                                                                                   : StaticMesh::neither;
+    request.coherence = m_settings->meshCoherence;
+    if (request.coherence && !m_cache) m_cache = std::make_unique<MeshPairCache>();
     thread_local ContactResult contacts;
     contacts.clear();
     collide_meshes(b.collisionMesh(), a.collisionMesh(), to_rigid(b_to_world.inverseTimes(w0->getWorldTransform())),
-                   request, contacts);
+                   request, contacts, m_cache.get());
     b.countCollision(contacts.counts);
     if (contacts.contacts.empty()) {
       // Last step's points are still in the manifold: refreshed (moved with the bodies, dropped
@@ -337,6 +339,9 @@ class MeshMeshAlgorithm : public btActivatingCollisionAlgorithm {
  private:
   btPersistentManifold* m_manifold = nullptr;
   const AlgorithmSettings* m_settings;
+  // The pair's state between steps (meshCoherence), freed with the algorithm, i.e. with the pair.
+  // Held by pointer: the algorithm lives in Bullet's pool of fixed-size elements.
+  std::unique_ptr<MeshPairCache> m_cache;
 };
 
 }  // namespace

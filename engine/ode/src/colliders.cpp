@@ -77,6 +77,7 @@ int write_contacts(GeomObject& object, const ContactArray& out, const RigidTrans
   object.candidate_facets.fetch_add(result.counts.candidates, std::memory_order_relaxed);
   object.merged.fetch_add(result.counts.merged, std::memory_order_relaxed);
   object.dropped.fetch_add(result.counts.dropped, std::memory_order_relaxed);
+  object.mesh_volume_tests.fetch_add(result.counts.volume_tests, std::memory_order_relaxed);
   object.contacts.fetch_add(std::uint64_t(count), std::memory_order_relaxed);
   return count;
 }
@@ -257,8 +258,11 @@ int collide_meshes_geom(const CollisionMesh& other, dGeomID o1, dGeomID o2, int 
   request.static_mesh = mine_static && !theirs_static   ? StaticMesh::mesh
                         : theirs_static && !mine_static ? StaticMesh::other
                                                         : StaticMesh::neither;
+  request.coherence = object.settings.mesh_coherence;
+  const std::shared_ptr<MeshPairCache> cache =
+      request.coherence && !request.early_stop ? mesh_pair_cache(o1, o2) : nullptr;
   ContactResult& result = scratch_result();
-  collide_meshes(*object.mesh, other, mesh_from(o1, o2), request, result);
+  collide_meshes(*object.mesh, other, mesh_from(o1, o2), request, result, cache.get());
   return write_contacts(object, out, pose_of(o1), result, true);
 }
 

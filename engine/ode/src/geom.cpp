@@ -59,6 +59,7 @@ int class_aabb_test(dGeomID self, dGeomID /*other*/, dReal aabb[6]) {
 }
 
 void class_dtor(dGeomID geom) {
+  forget_mesh_pair_caches(geom);
   GeomObject*& slot = slot_of(geom);
   delete slot;
   slot = nullptr;
@@ -301,6 +302,7 @@ int dBoxtreeInit() {
 void dBoxtreeClose() {
   std::lock_guard<std::mutex> lock(g_class_mutex);
   g_class = -1;
+  boxtree::ode::clear_mesh_pair_caches();
 }
 
 int dBoxtreeGetClass() { return g_class.load(); }
@@ -379,6 +381,7 @@ CollisionCounters geom_counters(dGeomID geom) {
   CollisionCounters counters;
   counters.calls = object.calls.load();
   counters.candidate_facets = object.candidate_facets.load();
+  counters.mesh_volume_tests = object.mesh_volume_tests.load();
   counters.contacts = object.contacts.load();
   counters.merged = object.merged.load();
   counters.dropped = object.dropped.load();
@@ -391,6 +394,7 @@ void reset_geom_counters(dGeomID geom) {
   detail::GeomObject& object = checked_object(geom, "boxtree::ode::reset_geom_counters");
   object.calls = 0;
   object.candidate_facets = 0;
+  object.mesh_volume_tests = 0;
   object.contacts = 0;
   object.merged = 0;
   object.dropped = 0;

@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "boxtree/collider.h"
 #include "boxtree/collision_mesh.h"
 #include "boxtree/convex_polyhedron.h"
 #include "boxtree/ode/boxtree_geom.h"
@@ -18,6 +19,7 @@ struct GeomObject {
   GeomSettings settings;
   std::atomic<std::uint64_t> calls{0};
   std::atomic<std::uint64_t> candidate_facets{0};
+  std::atomic<std::uint64_t> mesh_volume_tests{0};
   std::atomic<std::uint64_t> contacts{0};
   std::atomic<std::uint64_t> merged{0};
   std::atomic<std::uint64_t> dropped{0};
@@ -50,6 +52,14 @@ std::shared_ptr<const CollisionMesh> trimesh_mesh(dGeomID trimesh, const Method&
 
 // The collider table lookup (dGeomClass::collider): a pure function of the other class number.
 dColliderFn* collider_for(int other_class);
+
+// Mesh-vs-mesh coherence (pair_cache.cpp): the state of the ordered pair (my geom, the other),
+// made on first use; null when the registry is full (the call then descends fresh).
+constexpr std::uint64_t kUnseenSteps = 3;  // entries unseen for more steps are evicted
+constexpr std::size_t kMaxPairs = 1024;
+std::shared_ptr<MeshPairCache> mesh_pair_cache(dGeomID mine, dGeomID other);
+// Drops every entry of `geom` (its destructor calls it).
+void forget_mesh_pair_caches(dGeomID geom);
 
 // ODE keeps the mask of the contact count private (NUMC_MASK in collision_kernel.h).
 constexpr int kContactCountMask = 0xffff;
