@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <tuple>
 
 #include "boxtree/active_edges.h"
@@ -610,7 +611,10 @@ TEST(Collider, RayHitsAreBruteForcesHits) {
     EXPECT_EQ(front.size(), entering);
     total += all.size();
   }
-  EXPECT_GT(total, 100u);
+  std::printf("%zu hits of %d rays\n", total, test::scaled(200));
+  // Enough hits to check: 269 with gcc (BOXTREE_TEST_SCALE 1), 91 with clang (0.34); the bound
+  // scales with the ray count (before, 100 whatever the scale).
+  EXPECT_GT(total, std::size_t(test::scaled(100)));
 }
 
 }  // namespace

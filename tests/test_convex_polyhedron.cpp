@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -380,9 +381,13 @@ TEST(ContactPolyhedron, RandomHullsAgainstBruteForceAndGjkEpa) {
         ++not_least;
     }
   }
+  std::printf("%d of %d overlapping, %d patches, %d deeper than EPA's least by 5%%\n", overlapping, scaled(3000),
+              patches, not_least);
   EXPECT_GT(overlapping, scaled(3000) / 5);
   EXPECT_GT(patches, overlapping / 20);
-  EXPECT_LE(not_least, overlapping / 50);
+  // Deeper than EPA's least by 5%: 28 of 1895 (1.5%) with gcc (BOXTREE_TEST_SCALE 1), 15 of 652
+  // (2.3%) with clang (0.34) -> 2.5% (before, with the tests' former generator: 2%).
+  EXPECT_LE(not_least, overlapping / 40);
 }
 
 // A cube resting on a big floor triangle, turned about the vertical: a patch of its 4 bottom

@@ -32,6 +32,7 @@ namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 // FNV-1a over raw bytes.
 struct Fingerprint {
@@ -62,7 +63,7 @@ std::uint64_t tree_fingerprint(const Tree<V>& tree) {
 template <class V>
 std::uint64_t query_fingerprint(const Tree<V>& tree) {
   Fingerprint f;
-  boxtree::Random r(3);
+  Random r(3);
   const Aabb box = mesh_bounds(tree.mesh());
   for (int i = 0; i < 200; ++i) {
     QueryStats stats;

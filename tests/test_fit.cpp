@@ -31,7 +31,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
-#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -42,18 +41,11 @@
 namespace boxtree::detail {
 namespace {
 
+using test::Random;
 using test::scaled;
 
 constexpr Real kPi = 3.14159265358979323846;
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
-
-struct Random {
-  std::mt19937_64 engine;
-  explicit Random(std::uint64_t seed) : engine(seed) {}
-  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine); }
-  Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine); }
-  Real normal() { return std::normal_distribution<Real>(0, 1)(engine); }
-};
 
 std::string str(const Vec2& p) {
   char text[96];
@@ -517,7 +509,7 @@ TEST(FitPrincipalAxes, DeterministicAndOrderIndependent) {
     const Mat3 first = principal_axes(points.data(), points.size());
     const Mat3 again = principal_axes(points.data(), points.size());
     EXPECT_EQ(first, again);
-    std::shuffle(points.begin(), points.end(), r.engine);
+    r.shuffle(points.begin(), points.end());
     const Mat3 shuffled = principal_axes(points.data(), points.size());
     // Same axes with the same signs (the sign convention, not the input order, picks them).
     EXPECT_LT((first - shuffled).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;

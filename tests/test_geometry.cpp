@@ -21,7 +21,6 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -39,6 +38,7 @@ namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
@@ -72,7 +72,7 @@ std::array<Vec3, 3> grid_triangle(Random& rng, int lo, int hi, int denominator, 
         t[2] = t[0] + Real(0.5) * (t[1] - t[0]);
         break;  // collinear, c between
     }
-    std::shuffle(t.begin(), t.end(), rng.engine);
+    rng.shuffle(t.begin(), t.end());
   }
   return t;
 }
@@ -104,7 +104,7 @@ RMat identity_rmat() {
 // every axis parallel to some axis of the other frame.
 RMat signed_permutation(Random& rng) {
   std::array<int, 3> perm = {0, 1, 2};
-  std::shuffle(perm.begin(), perm.end(), rng.engine);
+  rng.shuffle(perm.begin(), perm.end());
   RMat m;
   for (int i = 0; i < 3; ++i) m[i][perm[i]] = rng.chance(0.5) ? 1 : -1;
   return m;

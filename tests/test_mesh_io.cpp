@@ -12,11 +12,11 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "boxtree/error.h"
+#include "boxtree/generate.h"
 #include "boxtree/io.h"
 #include "boxtree/mesh.h"
 #include "support/files.h"
@@ -218,7 +218,7 @@ TEST(MeshIoOff, QuadIsFannedInOrder) {
 }
 
 TEST(MeshIoObj, SaveThenLoadIsBitExact) {
-  std::mt19937_64 rng(12345);
+  boxtree::Random rng(12345);
   TriangleMesh mesh;
   // Random bit patterns cover every exponent (subnormals included), plus hand-picked edge values.
   const double specials[] = {0.0,
@@ -236,7 +236,7 @@ TEST(MeshIoObj, SaveThenLoadIsBitExact) {
     Vec3 p;
     for (int i = 0; i < 3; ++i) {
       do {
-        const std::uint64_t bits = rng();
+        const std::uint64_t bits = rng.next();
         std::memcpy(&p[i], &bits, 8);
       } while (!std::isfinite(p[i]));
     }
@@ -281,9 +281,9 @@ TEST(MeshIoError, EmptyFile) {
 }
 
 std::string garbage(std::size_t size, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
+  boxtree::Random rng(seed);
   std::string bytes(size, '\0');
-  for (char& c : bytes) c = static_cast<char>(rng() & 0xff);
+  for (char& c : bytes) c = static_cast<char>(rng.next() & 0xff);
   return bytes;
 }
 

@@ -18,6 +18,7 @@ namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 // Query counts times BOXTREE_TEST_SCALE.
 int scaled(int n) { return std::max(1, int(n * test_scale())); }

@@ -16,6 +16,7 @@ namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 // Where each facet's leaf sits: (inner node, slot), or (-1, 0) for a single-facet tree.
 std::map<FacetId, std::pair<long, int>> leaf_slots(const PackedAabbTree& packed) {

@@ -27,6 +27,7 @@ namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 TEST(QueryRay, MatchesBruteForceOnProceduralMeshes) {
   for (const auto& [name, mesh] : test::procedural_meshes()) check_rays(build_tree<Aabb>(mesh), 300, 1, name);

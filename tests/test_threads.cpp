@@ -21,12 +21,13 @@
 #include "support/checks.h"
 #include "support/files.h"
 #include "support/meshes.h"
-#include "support/random.h"  // after checks.h: its Random is boxtree::Random
+#include "support/random.h"
 
 namespace boxtree {
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 constexpr int kThreads = 8;
 
@@ -61,7 +62,7 @@ struct Inputs {
 Inputs make_inputs(const TriangleMesh& mesh, int count) {
   const Aabb box = mesh_bounds(mesh);
   const Real size = box.extent().norm();
-  boxtree::Random r(77);
+  Random r(77);
   Inputs in;
   for (int i = 0; i < count; ++i) {
     const Vec3 c = random_point_near(r, box);

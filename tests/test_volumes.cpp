@@ -33,7 +33,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -61,6 +60,7 @@ static_assert(is_volume_v<PieMinGeneral>, "PieMinGeneral must provide every volu
 namespace {
 
 using namespace test;
+using test::Random;  // not boxtree::Random: the tests' conveniences (support/random.h)
 
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 
@@ -132,7 +132,7 @@ std::vector<RPoint> shrunk(const std::vector<RPoint>& p, const Rational& sigma) 
 // Random signed permutation with determinant +1: a rotation that is exact in floating point.
 Mat3 signed_permutation(Random& rng) {
   std::array<int, 3> perm = {0, 1, 2};
-  std::shuffle(perm.begin(), perm.end(), rng.engine);
+  rng.shuffle(perm.begin(), perm.end());
   Mat3 m = Mat3::Zero();
   for (int i = 0; i < 3; ++i) m(i, perm[i]) = rng.chance(0.5) ? 1 : -1;
   if (m.determinant() < 0) m.col(0) = -m.col(0);
@@ -398,7 +398,7 @@ V random_volume(Random& rng, int leaves, const Vec3& center, Real size, Real deg
     level.push_back(V::from_triangle(t[0], t[1], t[2]));
   }
   while (level.size() > 1) {
-    std::shuffle(level.begin(), level.end(), rng.engine);
+    rng.shuffle(level.begin(), level.end());
     const V merged = V::enclosing(level[level.size() - 2], level.back());
     level.pop_back();
     level.back() = merged;
@@ -534,7 +534,7 @@ TYPED_TEST(VolumeKinds, EnclosingContainsBothChildren) {
       if (rng.chance(0.1)) level.push_back(level.back());  // identical children
     }
     while (level.size() > 1) {
-      std::shuffle(level.begin(), level.end(), rng.engine);
+      rng.shuffle(level.begin(), level.end());
       const V& x = level[level.size() - 2];
       const V& y = level.back();
       const V parent = V::enclosing(x, y);
@@ -598,7 +598,7 @@ TYPED_TEST(VolumeKinds, PointsInAChildAreInItsParent) {
       level.push_back(V::from_triangle(t[0], t[1], t[2]));
     }
     while (level.size() > 1) {
-      std::shuffle(level.begin(), level.end(), rng.engine);
+      rng.shuffle(level.begin(), level.end());
       const V& x = level[level.size() - 2];
       const V& y = level.back();
       const V parent = V::enclosing(x, y);
@@ -646,7 +646,7 @@ void check_coplanar_parents_are_flat() {
       level.push_back(V::from_triangle(corners[0], corners[1], corners[2]));
     }
     while (level.size() > 1) {
-      std::shuffle(level.begin(), level.end(), rng.engine);
+      rng.shuffle(level.begin(), level.end());
       const V parent = V::enclosing(level[level.size() - 2], level.back());
       const auto& s = shape_of(parent);
       const Real tol = 1e-11 * magnitude(s);

@@ -16,7 +16,6 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -99,16 +98,18 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
   btRigidBody ground_body(0, nullptr, ground.get());
   world.addRigidBody(&ground_body);
 
-  std::mt19937 rng(static_cast<unsigned>(seed));
-  std::uniform_real_distribution<float> size(0.3f, 0.8f), unit(0, 1);
+  // The tests' and benchmarks' one generator (generate.h's splitmix64): the same scene with every
+  // standard library.
+  boxtree::Random rng(seed);
+  const auto size = [&rng] { return float(rng.uniform(0.3, 0.8)); };
+  const auto unit = [&rng] { return float(rng.uniform()); };
   // Several draws never share one call: the order of a call's arguments is unspecified (gcc
-  // evaluates them last first, clang first first). They are drawn one per statement in the order
-  // gcc gave the former one-call forms, last argument first, so the scene is the one measured
-  // before, now on both compilers.
+  // evaluates them last first, clang first first). They are drawn one per statement (in the order
+  // gcc gave the former one-call forms, last argument first), the same on both compilers.
   const auto size_vector = [&](float offset) {
-    const float z = size(rng) + offset;
-    const float y = size(rng) + offset;
-    const float x = size(rng) + offset;
+    const float z = size() + offset;
+    const float y = size() + offset;
+    const float x = size() + offset;
     return btVector3(x, y, z);
   };
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
@@ -118,14 +119,14 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
   for (int i = 0; i < bodies; ++i) {
     switch (i % 5) {
       case 0:
-        shapes.push_back(std::make_unique<btSphereShape>(size(rng)));
+        shapes.push_back(std::make_unique<btSphereShape>(size()));
         break;
       case 1:
         shapes.push_back(std::make_unique<btBoxShape>(size_vector(0)));
         break;
       case 2: {
-        const float height = size(rng) * 1.5f;  // before the radius: see above
-        shapes.push_back(std::make_unique<btCapsuleShapeZ>(size(rng) * 0.7f, height));
+        const float height = size() * 1.5f;  // before the radius: see above
+        shapes.push_back(std::make_unique<btCapsuleShapeZ>(size() * 0.7f, height));
         break;
       }
       case 3:
@@ -140,9 +141,9 @@ Result run(Midphase midphase, const boxtree::TriangleMesh& terrain, const std::s
     }
     btVector3 inertia;
     shapes.back()->calculateLocalInertia(1, inertia);
-    const btScalar pz = btScalar(20 + 10 * unit(rng));  // z first: see above
-    const btScalar py = btScalar(lo.y() + (hi.y() - lo.y()) * (0.1 + 0.8 * unit(rng)));
-    const btScalar px = btScalar(lo.x() + (hi.x() - lo.x()) * (0.1 + 0.8 * unit(rng)));
+    const btScalar pz = btScalar(20 + 10 * unit());  // z first: see above
+    const btScalar py = btScalar(lo.y() + (hi.y() - lo.y()) * (0.1 + 0.8 * unit()));
+    const btScalar px = btScalar(lo.x() + (hi.x() - lo.x()) * (0.1 + 0.8 * unit()));
     const btVector3 p(px, py, pz);
     btRigidBody::btRigidBodyConstructionInfo info(1, nullptr, shapes.back().get(), inertia);
     info.m_startWorldTransform.setOrigin(p);
@@ -229,8 +230,8 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
   std::vector<std::unique_ptr<Arrays>> rock_arrays;
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btRigidBody>> bodies;
-  std::mt19937 rng(static_cast<unsigned>(seed));
-  std::uniform_real_distribution<float> unit(0, 1);
+  boxtree::Random rng(seed);  // generate.h's splitmix64, as above
+  const auto unit = [&rng] { return float(rng.uniform()); };
   boxtree::Vec3 lo = terrain.vertices.front(), hi = lo;
   for (const auto& v : terrain.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
   for (int i = 0; i < rocks; ++i) {
@@ -247,9 +248,9 @@ RockResult run_rocks(bool boxtree, const boxtree::TriangleMesh& terrain, const s
     shapes.back()->calculateLocalInertia(2, inertia);
     btRigidBody::btRigidBodyConstructionInfo info(2, nullptr, shapes.back().get(), inertia);
     // z first, then y, then x: gcc's order for the former btVector3 of three draws.
-    const btScalar z = btScalar(hi.z() + 3 + 3 * unit(rng));
-    const btScalar y = btScalar(lo.y() + (hi.y() - lo.y()) * (0.3 + 0.4 * unit(rng)));
-    const btScalar x = btScalar(lo.x() + (hi.x() - lo.x()) * (0.3 + 0.4 * unit(rng)));
+    const btScalar z = btScalar(hi.z() + 3 + 3 * unit());
+    const btScalar y = btScalar(lo.y() + (hi.y() - lo.y()) * (0.3 + 0.4 * unit()));
+    const btScalar x = btScalar(lo.x() + (hi.x() - lo.x()) * (0.3 + 0.4 * unit()));
     info.m_startWorldTransform.setOrigin(btVector3(x, y, z));
     bodies.push_back(std::make_unique<btRigidBody>(info));
     bodies.back()->setRollingFriction(0.1f);

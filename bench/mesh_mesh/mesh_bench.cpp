@@ -55,6 +55,7 @@
 #include "boxtree/build.h"
 #include "boxtree/collide.h"
 #include "boxtree/error.h"
+#include "boxtree/generate.h"
 #include "boxtree/geometry.h"
 #include "boxtree/io.h"
 #include "boxtree/method.h"
@@ -85,18 +86,10 @@ struct Case {
   double gimpact_margin = 0;
 };
 
-// ---- random poses (fixed seed, the same on every machine: our own uniform doubles) ----
-struct Random {
-  std::uint64_t state;
-  explicit Random(std::uint64_t seed) : state(seed) {}
-  std::uint64_t next() {  // splitmix64
-    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return double(next() >> 11) * 0x1.0p-53; }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+// ---- random poses (fixed seed, the same on every machine: generate.h's splitmix64, whose
+// mapping to doubles is the one this file's former copy had, so the poses are unchanged) ----
+struct Random : boxtree::Random {
+  using boxtree::Random::Random;
   // Uniform rotation (Shoemake, Graphics Gems III: uniform random rotations).
   Mat3 rotation() {
     const double u1 = uniform(), u2 = 2 * M_PI * uniform(), u3 = 2 * M_PI * uniform();

@@ -6,10 +6,11 @@
 #include <BulletCollision/CollisionShapes/btTriangleShape.h>
 #include <LinearMath/btPoolAllocator.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
-#include <random>
+#include <vector>
 
 #include "boxtree/collide.h"
 #include "boxtree/geometry.h"
@@ -25,32 +26,30 @@ Real terrain_height(const AnyTree& tree, Real x, Real y) {
   return hit ? 1000 - hit->t : -1e30;
 }
 
-// A btVector3 of three draws from `d`, z first, then y, then x: the order gcc gave the former
-// btVector3(d(rng), d(rng), d(rng)) (see tests/support/random.h).
-btVector3 draw_vector(std::uniform_real_distribution<float>& d, std::mt19937& rng) {
-  const btScalar z = d(rng);
-  const btScalar y = d(rng);
-  const btScalar x = d(rng);
+// A btVector3 of three draws in [lo, hi), z first, then y, then x (see tests/support/random.h).
+btVector3 draw_vector(Random& rng, Real lo, Real hi) {
+  const btScalar z = btScalar(rng.uniform(lo, hi));
+  const btScalar y = btScalar(rng.uniform(lo, hi));
+  const btScalar x = btScalar(rng.uniform(lo, hi));
   return btVector3(x, y, z);
 }
 
-std::unique_ptr<btCollisionShape> make_body_shape(int kind, std::mt19937& rng) {
-  std::uniform_real_distribution<float> s(0.3f, 0.8f);
+std::unique_ptr<btCollisionShape> make_body_shape(int kind, Random& rng) {
+  const auto s = [&rng] { return btScalar(rng.uniform(0.3, 0.8)); };
   switch (kind % 5) {
     case 0:
-      return std::make_unique<btSphereShape>(s(rng));
+      return std::make_unique<btSphereShape>(s());
     case 1:
-      return std::make_unique<btBoxShape>(draw_vector(s, rng));
+      return std::make_unique<btBoxShape>(draw_vector(rng, 0.3, 0.8));
     case 2: {
-      const float height = s(rng) * 1.5f;  // before the radius: see tests/support/random.h
-      return std::make_unique<btCapsuleShapeZ>(s(rng) * 0.7f, height);
+      const btScalar height = s() * 1.5f;  // before the radius: see tests/support/random.h
+      return std::make_unique<btCapsuleShapeZ>(s() * 0.7f, height);
     }
     case 3:
-      return std::make_unique<btCylinderShapeZ>(draw_vector(s, rng));
+      return std::make_unique<btCylinderShapeZ>(draw_vector(rng, 0.3, 0.8));
     default: {
       auto hull = std::make_unique<btConvexHullShape>();
-      std::uniform_real_distribution<float> p(-0.6f, 0.6f);
-      for (int i = 0; i < 12; ++i) hull->addPoint(draw_vector(p, rng), false);
+      for (int i = 0; i < 12; ++i) hull->addPoint(draw_vector(rng, -0.6, 0.6), false);
       hull->recalcLocalAabb();
       // Faces: Bullet's hull-hull pairs use its clipping; boxtree keeps GJK for hulls unless
       // AlgorithmSettings::hullFaces (the test below).
@@ -77,12 +76,11 @@ struct DropScene {
     } else {
       world.add(std::make_unique<btBvhTriangleMeshShape>(mesh.array.get(), true), 0, btVector3(0, 0, 0));
     }
-    std::mt19937 rng(17);
-    std::uniform_real_distribution<float> xy(8, 42), angle(0, 3.14f);
+    Random rng(17);
     for (int i = 0; i < count; ++i) {
-      const float y = xy(rng);  // y first: see tests/support/random.h
-      const btVector3 p(xy(rng), y, 14 + float(i % 7) * 1.6f);
-      const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), angle(rng));
+      const btScalar y = btScalar(rng.uniform(8, 42));  // y first: see tests/support/random.h
+      const btVector3 p(btScalar(rng.uniform(8, 42)), y, 14 + float(i % 7) * 1.6f);
+      const btQuaternion q(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(rng.uniform(0, 3.14)));
       btRigidBody* body = world.add(make_body_shape(i, rng), 1, p, q);
       // Some rolling resistance, so that spheres and cylinders settle in the hollows instead of
       // rolling for ever: the comparison is about resting contact.
@@ -105,22 +103,25 @@ struct DropScene {
   }
 };
 
-// Measured on this scene (CI's two passes: gcc -O2 with single- and double-precision Bullet, clang
-// -O1 + ASan with double precision). Bodies at rest (below 0.5 m/s): the deepest 2.2 cm into the
-// terrain with gcc (boxtree with GJK; Bullet's own 1.9, boxtree analytic 2.0), 2.52 cm with clang
-// (a box in Bullet's own world) -> allowance 3 cm. Bodies still moving (rolling down slopes): at
-// most 6 of 40 after 6 s -> 7; a rolling body's momentary penetration is not a resting depth: with
-// clang, a cylinder rolling at 0.8 m/s was 15.1 cm in on the boxtree GJK path (obb-min) and 3.5 cm
-// on the analytic one (cylinders took GJK there then; since issue 24 they take the core's analytic
-// cylinder routine: gcc, deepest moving body 0.03 cm above), so a moving body is only required to
-// have its centre above the terrain. Contact points at rest: within 3.6% of Bullet's
-// own count with gcc, 6.0% with clang -> 7%.
+// Measured on this scene (CI's two passes: gcc -O2 with single-precision Bullet, clang -O1 + ASan
+// with double precision), drawn from the tests' splitmix64 generator (tests/support/random.h)
+// since issue 24. Bodies at rest (below 0.5 m/s): the deepest 1.9 cm into the terrain with gcc
+// (boxtree with GJK; Bullet's own 1.7, boxtree analytic 0.05), 2.3 cm with clang (boxtree with
+// GJK) -> allowance 3 cm (before, with the scene's former std::mt19937 draws: 2.2 and 2.5 cm).
+// Bodies still moving (rolling down slopes) after 6 s: 5, 5 and 7 of 40 (Bullet's own, boxtree
+// analytic, boxtree GJK) with gcc, 5, 5 and 9 with clang -> 10 (before: at most 6 -> 7). A rolling
+// body's momentary penetration is not a resting depth (with clang and the former draws, a
+// cylinder rolling at 0.8 m/s was 15.1 cm in on the boxtree GJK path), so a moving body is only
+// required to have its centre above the terrain. Contact points at rest, against Bullet's own
+// count: boxtree analytic 5.6% more with gcc, 17.0% more with clang; boxtree GJK 1.0% and 3.5%
+// more -> 18% (before: within 3.6% with gcc, 6.0% with clang -> 7%). The clang figure is Bullet's
+// own that moved: 121.8 points per step in double precision against 134.7 in single, where
+// boxtree's analytic count is 142.4 and 142.3.
 constexpr Real kDropDepthAllowance = 0.03;
-constexpr int kDropMovingAllowance = 7;
-constexpr double kDropContactRatioAllowance = 0.07;
-// Bodies that left the terrain over its edge: none with gcc; with clang (another scene, see the
-// draws above) one capsule of the all-GJK world rolled off at 3.9 m/s after the GJK contacts were
-// kept to the request's margin -> 1.
+constexpr int kDropMovingAllowance = 10;
+constexpr double kDropContactRatioAllowance = 0.18;
+// Bodies that left the terrain over its edge: one sphere of Bullet's own world (at 6.85 m/s) with
+// both compilers; none of boxtree's -> 1 (before: with clang one capsule of the all-GJK world).
 constexpr int kDropOffAllowance = 1;
 
 TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
@@ -194,24 +195,27 @@ TEST(BulletAlgorithms, DropSceneRestsLikeBulletsOwnShape) {
 // separating axes' least lift that clears the triangle where the hull overhangs its edge.
 TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
   const TriangleMesh terrain = make_terrain(24, 24, 5, 12, 1.5);
-  std::mt19937 rng(23);
-  std::uniform_real_distribution<float> p(-0.5f, 0.5f), xy(3, 9), angle(0, 6.28f), unit(-1, 1);
+  Random rng(23);
+  const auto xy = [&rng] { return btScalar(rng.uniform(3, 9)); };
+  const auto unit = [&rng] { return btScalar(rng.uniform(-1, 1)); };
   int compared = 0, more_points = 0;
+  std::vector<Real> differences;  // |deepest contact, face path - GJK|, per pose compared
   for (int trial = 0; trial < 60; ++trial) {
-    auto make_hull = [&](std::mt19937 r) {
+    auto make_hull = [&](Random r) {
       auto hull = std::make_unique<btConvexHullShape>();
-      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(draw_vector(p, r) * 0.8f, false);
+      for (int i = 0; i < 10 + trial % 10; ++i) hull->addPoint(draw_vector(r, -0.5, 0.5) * 0.8f, false);
       hull->recalcLocalAabb();
       hull->initializePolyhedralFeatures();
       return hull;
     };
-    const std::mt19937 shape_seed(rng());
-    const float at_y = xy(rng);  // y first: see tests/support/random.h
-    const btVector3 at(xy(rng), at_y, 0);
-    const btScalar turn_angle = angle(rng);  // the angle first, then the axis z, y, x: see tests/support/random.h
-    const btScalar axis_z = unit(rng) + 0.01f;
-    const btScalar axis_y = unit(rng);
-    const btQuaternion turn(btVector3(unit(rng), axis_y, axis_z).normalized(), turn_angle);
+    const Random shape_seed(rng.next());
+    const btScalar at_y = xy();  // y first: see tests/support/random.h
+    const btVector3 at(xy(), at_y, 0);
+    // The angle first, then the axis z, y, x: see tests/support/random.h.
+    const btScalar turn_angle = btScalar(rng.uniform(0, 6.28));
+    const btScalar axis_z = unit() + 0.01f;
+    const btScalar axis_y = unit();
+    const btQuaternion turn(btVector3(unit(), axis_y, axis_z).normalized(), turn_angle);
     const btScalar sink = btScalar(0.02 + 0.08 * (trial % 5) / 4.0);  // 2 to 10 cm into the ground
     float deepest[2] = {0, 0};
     int points[2] = {0, 0};
@@ -241,18 +245,33 @@ TEST(BulletAlgorithms, HullWithFacesAgreesWithGjkOnTheDeepestContact) {
     if (points[1] == 0) continue;  // GJK found nothing (the hull's lowest corner sits over no facet's reach)
     ++compared;
     more_points += points[0] > points[1];
-    // The separating axes are exact (core hull + margin, test_convex_polyhedron's brute force);
-    // EPA on floats mostly comes from inside, shallower by up to ~4 mm here (once, in the -O2
-    // sanitizer build, 0.6 mm deeper). Where the terrain's internal edges turn a contact to the
-    // face normal the two paths' contacts differ in normal and so in corrected depth (up to ~11 mm
-    // here, deeper on the face path). A wrong frame or a margin counted twice or not at all would
-    // be off by the 4 cm margin or more.
-    EXPECT_LE(deepest[0], deepest[1] + 2e-3) << "trial " << trial;
-    EXPECT_GE(deepest[0], deepest[1] - 1.5e-2)
+    const Real difference = Real(deepest[0]) - Real(deepest[1]);  // < 0: the face path deeper
+    differences.push_back(std::abs(difference));
+    // The separating axes are exact (core hull + margin, test_convex_polyhedron's brute force) and
+    // EPA on floats comes from inside: on the three poses that differ most below, before the
+    // internal edges, the core's separating axes and its own GJK/EPA found the same deepest
+    // contact to 0.7 mm (EPA up to 3.5 mm shallower on single facets; gcc). Where the internal edges
+    // turn a contact to the face normal, its depth is projected onto that normal (active_edges.h),
+    // so a corrected depth follows the normal it came with; where several axes nearly tie, the two
+    // paths take different ones. Measured, gcc and clang alike: 48 of 54 poses within 0.1 mm; the
+    // GJK path deeper by up to 6.5 mm (trial 19), the face path by up to 34.0 mm (trial 46) ->
+    // 1 cm and 4 cm (before, with the tests' former std::mt19937 draws: up to ~4 mm and ~11 mm ->
+    // 2 mm and 1.5 cm).
+    EXPECT_LE(deepest[0], deepest[1] + 1e-2) << "trial " << trial;
+    EXPECT_GE(deepest[0], deepest[1] - 4e-2)
         << "trial " << trial << ": separating axes " << points[0] << " points, GJK " << points[1];
   }
   std::printf("%d poses compared; the face path gave more manifold points than GJK on %d\n", compared, more_points);
   EXPECT_GT(compared, 45);
+  // A wrong frame, or a margin counted twice or not at all, would move every pose by the 4 cm
+  // margin or more; the edge corrections above move a few. The median difference: 0.02 mm with
+  // gcc, 0.03 mm with clang -> 1 mm.
+  ASSERT_FALSE(differences.empty());
+  std::nth_element(differences.begin(), differences.begin() + std::ptrdiff_t(differences.size() / 2),
+                   differences.end());
+  const Real median = differences[differences.size() / 2];
+  std::printf("median |deepest(face path) - deepest(GJK)| %.5f m\n", double(median));
+  EXPECT_LT(median, 1e-3);
   EXPECT_GE(more_points, 5);  // patches: several points from one pass where a face rests on facets
 }
 

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
-#include <random>
 #include <set>
 #include <tuple>
 
@@ -45,21 +44,23 @@ TEST(BulletMeshShape, ProcessAllTrianglesIsExactAndWithinBulletsSet) {
   const BulletMesh bm(test_terrain());
   const TriangleMesh reference = bm.as_boxtree();
   btBvhTriangleMeshShape bullet(bm.array.get(), true);
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> pos(-5, 55), zpos(-2, 12), size(0, 6);
+  Random rng(3);
+  const auto pos = [&rng] { return rng.uniform(-5, 55); };
+  const auto zpos = [&rng] { return rng.uniform(-2, 12); };
+  const auto size = [&rng] { return rng.uniform(0, 6); };
   for (const std::string& method : kMethods) {
     SCOPED_TRACE(method);
     const BoxtreeMeshShape shape(*bm.array, method);
     const bool by_box = method == "aabb";
     std::size_t ours_total = 0, bullet_total = 0;
     for (int q = 0; q < 300; ++q) {
-      const btScalar c_z = btScalar(zpos(rng));  // z first: see tests/support/random.h
-      const btScalar c_y = btScalar(pos(rng));
-      const btScalar c_x = btScalar(pos(rng));
+      const btScalar c_z = btScalar(zpos());  // z first: see tests/support/random.h
+      const btScalar c_y = btScalar(pos());
+      const btScalar c_x = btScalar(pos());
       const btVector3 c(c_x, c_y, c_z);
-      const btScalar h_z = btScalar(q % 10 == 0 ? 0 : size(rng));  // z first: see tests/support/random.h
-      const btScalar h_y = btScalar(size(rng));
-      const btScalar h_x = btScalar(size(rng));
+      const btScalar h_z = btScalar(q % 10 == 0 ? 0 : size());  // z first: see tests/support/random.h
+      const btScalar h_y = btScalar(size());
+      const btScalar h_x = btScalar(size());
       const btVector3 h(h_x, h_y, h_z);
       const btVector3 lo = c - h, hi = c + h;
       const Aabb box{to_vec3(lo), to_vec3(hi)};
@@ -147,16 +148,16 @@ TEST(BulletMeshShape, LocalScalingIncludingNegativeMatchesBruteForce) {
     }
     EXPECT_LT((to_vec3(lo) - expected_lo).norm(), 1e-4);  // negative scale: the ends swap
     EXPECT_LT((to_vec3(hi) - expected_hi).norm(), 1e-4);
-    std::mt19937 rng(9);
-    std::uniform_real_distribution<double> u(0, 1);
+    Random rng(9);
+    const auto u = [&rng] { return rng.uniform(0, 1); };
     for (int q = 0; q < 100; ++q) {
-      const btScalar c_z = btScalar(-u(rng) * 12);  // z first: see tests/support/random.h
-      const btScalar c_y = btScalar(u(rng) * 25);
-      const btScalar c_x = btScalar(u(rng) * 100);
+      const btScalar c_z = btScalar(-u() * 12);  // z first: see tests/support/random.h
+      const btScalar c_y = btScalar(u() * 25);
+      const btScalar c_x = btScalar(u() * 100);
       const btVector3 c(c_x, c_y, c_z);
-      const btScalar h_z = btScalar(u(rng) * 4);  // z first: see tests/support/random.h
-      const btScalar h_y = btScalar(u(rng) * 8);
-      const btScalar h_x = btScalar(u(rng) * 8);
+      const btScalar h_z = btScalar(u() * 4);  // z first: see tests/support/random.h
+      const btScalar h_y = btScalar(u() * 8);
+      const btScalar h_x = btScalar(u() * 8);
       const btVector3 h(h_x, h_y, h_z);
       CollectTriangles cb;
       shape.processAllTriangles(&cb, c - h, c + h);
@@ -370,16 +371,17 @@ TEST(BulletMeshShape, ShapesShareOneBuiltTree) {
   EXPECT_NE(&a.collisionMesh(), &from_mesh.collisionMesh());
   std::printf("collision mesh of %zu facets: %zu bytes, held once by both shapes\n", terrain->facet_count(),
               a.collisionMesh().memory_bytes());
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<double> pos(0, 50), size(0.5, 5);
+  Random rng(4);
+  const auto pos = [&rng] { return rng.uniform(0, 50); };
+  const auto size = [&rng] { return rng.uniform(0.5, 5); };
   for (int q = 0; q < 50; ++q) {
-    const btScalar c_z = btScalar(pos(rng) / 10);  // z first: see tests/support/random.h
-    const btScalar c_y = btScalar(pos(rng));
-    const btScalar c_x = btScalar(pos(rng));
+    const btScalar c_z = btScalar(pos() / 10);  // z first: see tests/support/random.h
+    const btScalar c_y = btScalar(pos());
+    const btScalar c_x = btScalar(pos());
     const btVector3 c(c_x, c_y, c_z);
-    const btScalar h_z = btScalar(size(rng));  // z first: see tests/support/random.h
-    const btScalar h_y = btScalar(size(rng));
-    const btScalar h_x = btScalar(size(rng));
+    const btScalar h_z = btScalar(size());  // z first: see tests/support/random.h
+    const btScalar h_y = btScalar(size());
+    const btScalar h_x = btScalar(size());
     const btVector3 h(h_x, h_y, h_z);
     EXPECT_EQ(collect(a, c - h, c + h), collect(from_mesh, c - h, c + h)) << "query " << q;
   }
@@ -433,20 +435,20 @@ TEST(BulletMeshShape, RayTestGivesBulletsClosestHits) {
   for (const std::string& method : {std::string("aabb"), std::string("obb-min"), std::string("pie-min+aabb@3")}) {
     SCOPED_TRACE(method);
     TwoWorlds w(test_terrain(), method, pose);
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> u(-10, 60);
+    Random rng(11);
+    const auto u = [&rng] { return rng.uniform(-10, 60); };
     int hits = 0, ties = 0;
     w.shape->resetCounters();
     const int rays = 1500;
     std::uint64_t triangles_seen = 0;
     for (int i = 0; i < rays; ++i) {
-      const btScalar from_z = btScalar(u(rng) / 2 + 10);  // z first: see tests/support/random.h
-      const btScalar from_y = btScalar(u(rng));
-      const btScalar from_x = btScalar(u(rng));
+      const btScalar from_z = btScalar(u() / 2 + 10);  // z first: see tests/support/random.h
+      const btScalar from_y = btScalar(u());
+      const btScalar from_x = btScalar(u());
       const btVector3 from = pose(btVector3(from_x, from_y, from_z));
-      const btScalar to_z = btScalar(-u(rng) / 4 - 5);  // z first: see tests/support/random.h
-      const btScalar to_y = btScalar(u(rng));
-      const btScalar to_x = btScalar(u(rng));
+      const btScalar to_z = btScalar(-u() / 4 - 5);  // z first: see tests/support/random.h
+      const btScalar to_y = btScalar(u());
+      const btScalar to_x = btScalar(u());
       const btVector3 to = pose(btVector3(to_x, to_y, to_z));
       ClosestWithTriangle a(from, to), b(from, to);
       w.bullet.world.rayTest(from, to, a);
@@ -491,20 +493,20 @@ TEST(BulletMeshShape, ConvexSweepTestMatchesBullet) {
   btSphereShape sphere(btScalar(0.7));
   btBoxShape box(btVector3(btScalar(0.5), btScalar(1.0), btScalar(0.3)));
   btCapsuleShapeZ capsule(btScalar(0.4), btScalar(1.2));
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-5, 55);
+  Random rng(5);
+  const auto u = [&rng] { return rng.uniform(-5, 55); };
   int hits = 0;
   for (int i = 0; i < 300; ++i) {
     const btConvexShape* cast = i % 3 == 0   ? static_cast<btConvexShape*>(&sphere)
                                 : i % 3 == 1 ? static_cast<btConvexShape*>(&box)
                                              : &capsule;
-    const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(u(rng) / 10));
-    const btScalar from_at_z = btScalar(15 + u(rng) / 5);  // z first: see tests/support/random.h
-    const btScalar from_at_y = btScalar(u(rng));
-    const btScalar from_at_x = btScalar(u(rng));
+    const btQuaternion r0(btVector3(1, 1, 0).normalized(), btScalar(u() / 10));
+    const btScalar from_at_z = btScalar(15 + u() / 5);  // z first: see tests/support/random.h
+    const btScalar from_at_y = btScalar(u());
+    const btScalar from_at_x = btScalar(u());
     const btTransform from(r0, pose(btVector3(from_at_x, from_at_y, from_at_z)));
-    const btScalar to_at_y = btScalar(u(rng));  // y first: see tests/support/random.h
-    const btScalar to_at_x = btScalar(u(rng));
+    const btScalar to_at_y = btScalar(u());  // y first: see tests/support/random.h
+    const btScalar to_at_x = btScalar(u());
     const btTransform to(r0, pose(btVector3(to_at_x, to_at_y, btScalar(-8))));
     btCollisionWorld::ClosestConvexResultCallback a(from.getOrigin(), to.getOrigin()),
         b(from.getOrigin(), to.getOrigin());

@@ -13,6 +13,7 @@
 #include "boxtree/volume/hybrid.h"
 #include "support/brute_force.h"
 #include "support/meshes.h"
+#include "support/random.h"
 
 namespace boxtree::test {
 
