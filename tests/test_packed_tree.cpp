@@ -432,13 +432,16 @@ TEST(PackedTree, AnyTreeHoldsThePackedFormForAabb) {
 }
 
 // Spheres that only just touch facets: centred off a terrain vertex with the radius that reaches
-// it, grown or shrunk by a few ulps, and spheres centred far outside the tree's grid (more than
-// 2^17 grid steps away: the walk's single-precision sphere test stands aside there). The packed
-// walk (its node test in float on the grid) must report exactly the facets that
+// it, grown or shrunk by a few ulps, and spheres centred far outside the tree's grid (1e4 m away:
+// beyond it on every axis), on a rough and on a flat terrain (whose grid is a sliver in height:
+// every centre over it is beyond the grid). The packed walk (its node test in float on the grid,
+// the part beyond the grid taken in double) must report exactly the facets that
 // triangle_overlaps_sphere accepts, never losing one to its node culling, and those facets must
 // be the independent oracle's (brute_force.h).
-TEST(PackedTree, SphereQueryTouchingVerticesIsTriangleOverlapsSphere) {
-  const TriangleMesh terrain = make_terrain(24, 24, 5, 24, 3);
+class PackedTreeSphere : public ::testing::TestWithParam<Real> {};
+
+TEST_P(PackedTreeSphere, QueryTouchingVerticesIsTriangleOverlapsSphere) {
+  const TriangleMesh terrain = make_terrain(24, 24, 5, 24, GetParam());
   const PackedAabbTree packed(build_tree<Aabb>(terrain));
   const auto reference = [&](const Sphere& sphere) {
     std::vector<FacetId> out;
@@ -465,6 +468,23 @@ TEST(PackedTree, SphereQueryTouchingVerticesIsTriangleOverlapsSphere) {
     reported += expected.size();
   }
   EXPECT_GT(reported, 400u);
+}
+
+INSTANTIATE_TEST_SUITE_P(RoughAndFlat, PackedTreeSphere, ::testing::Values(Real(3), Real(0)));
+
+// A sphere resting on a flat terrain of 1 m cells (radius 1, centre 0.9 m over it: it meets the
+// plane in a disk of radius 0.44 m) is culled in all three axes: the facets its bounding box
+// covers in x and y (about 2 x 2 cells, 8 to 18 facets) are not all tested, only those near the
+// disk. A node test that gave up on the flat grid's height tested them all.
+TEST(PackedTree, SphereOnAFlatTerrainTestsOnlyTheFacetsNearIt) {
+  const TriangleMesh flat = make_terrain(24, 24, 5, 24, 0);
+  const PackedAabbTree packed(build_tree<Aabb>(flat));
+  for (const Vec3& center : {Vec3(10.5, 10.5, 0.9), Vec3(7.25, 13.8, 0.9), Vec3(12, 4, 0.9)}) {
+    QueryStats stats;
+    const std::vector<FacetId> got = query_overlap(packed, Sphere{center, 1.0}, &stats);
+    EXPECT_EQ(violations(got, brute_overlap(flat, Sphere{center, 1.0})), "");
+    EXPECT_LE(stats.leaf_tests, got.size() + 4) << center.transpose();
+  }
 }
 
 // Oriented boxes that only just touch facets: axis-aligned boxes with a face through a vertex

@@ -334,30 +334,37 @@ struct GridObbAxes {
 };
 
 // A sphere against four children at once, in single precision on the grid: child c is apart
-// when the distance from the centre to its box exceeds the radius. Per axis the gap in grid steps
-// is max(lo - c, c - hi, 0), c the centre on the grid; lo and hi are exact in float, c (kept
-// within 2^17 steps of the origin) rounds by at most 2^-8 steps and each difference by 2^-7, so
-// each gap is taken 2^-5 steps smaller, a lower bound of the true gap; the squared world distance
-// from those gaps rounds by a few float ulps, which `reach2` allows for (64 ulps of r^2). So the
-// test never culls a child whose true box the sphere touches. Disabled (every child passes) for
-// centres farther from the grid or radii that float cannot hold.
+// when the distance from the centre to its box exceeds the radius. The centre is first clamped to
+// the grid ([0, 65535] steps on each axis, where every box lies): its distance beyond the grid on
+// an axis (e.g. the height of a sphere over a flat terrain, whose grid is a sliver) adds to every
+// child's distance, so its square is taken from the radius's once, in double. Per axis the gap in
+// grid steps is then max(lo - c, c - hi, 0) for the clamped centre c; lo and hi are exact in
+// float, c rounds by at most 2^-9 steps and each difference by 2^-8, so each gap is taken 2^-5
+// steps smaller, a lower bound of the true gap; the squared world distance from those gaps
+// rounds by a few float ulps, which `reach2` allows for (64 ulps of r^2, and 1e-9 of the part
+// beyond the grid). So the test never culls a child whose true box the sphere touches. Disabled
+// (every child passes) for centres or radii that double or float cannot hold.
 struct GridSphere {
   bool enabled = false;
-  float center[3] = {};  // on the grid
+  float center[3] = {};  // on the grid, clamped to it
   float step[3] = {};    // world length of a grid step per axis
-  float reach2 = 0;      // squared radius, padded
+  float reach2 = 0;      // the squared radius less the squared distance beyond the grid, padded
 
   GridSphere(const PackedAabbTree& tree, const Sphere& sphere) {
     bool finite = std::isfinite(sphere.radius) && sphere.radius < Real(1e18);
+    Real beyond2 = 0;
     for (int i = 0; i < 3; ++i) {
       const Real c = (sphere.center[i] - tree.origin()[i]) * tree.inv_step()[i];
-      finite = finite && std::isfinite(c) && std::abs(c) < Real(131072) && tree.step()[i] < Real(1e18);
-      center[i] = float(c);
+      finite = finite && std::isfinite(c) && tree.step()[i] < Real(1e18);
+      const Real clamped = std::clamp(c, Real(0), Real(65535));
+      const Real beyond = (c - clamped) * tree.step()[i];
+      beyond2 += beyond * beyond;
+      center[i] = float(clamped);
       step[i] = float(tree.step()[i]);
     }
     const Real r2 = sphere.radius * sphere.radius;
-    reach2 = float(r2 * (1 + 64 * Real(std::numeric_limits<float>::epsilon())));
-    enabled = finite && std::isfinite(reach2);
+    reach2 = float(r2 * (1 + 64 * Real(std::numeric_limits<float>::epsilon())) - beyond2 * (1 - Real(1e-9)));
+    enabled = finite && std::isfinite(beyond2) && std::isfinite(reach2);
   }
 
   unsigned overlaps(const PackedAabbTree::Node& node, unsigned mask) const {
