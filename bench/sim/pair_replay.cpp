@@ -24,13 +24,16 @@ int main(int argc, char** argv) {
   CLI::App app{"Drop scene: the terrain-body pairs at one moment, replayed, built-in vs boxtree"};
   int bodies = 500, cells = 256, settle = 160, repeats = 50, rounds = 3;
   std::uint64_t seed = 1;
-  std::string only_name, midphase = "both", method = "aabb", engine = "ode";
+  std::string only_name, midphase = "both", method = "aabb", engine = "ode", terrain_name = "bowl";
   app.add_option("--bodies", bodies, "Bodies in the scene")->capture_default_str();
   app.add_option("--cells", cells, "Terrain cells per side")->capture_default_str();
   app.add_option("--settle", settle, "Steps before the replay (the built-in world)")->capture_default_str();
   app.add_option("--repeats", repeats, "Times every pair is collided")->capture_default_str();
   app.add_option("--rounds", rounds, "Replays per world, alternating; the fastest is kept")->capture_default_str();
   app.add_option("--seed", seed, "Scene seed")->capture_default_str();
+  app.add_option("--terrain", terrain_name, "bowl, rough or flat (scene_matrix's terrains)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"bowl", "rough", "flat"}));
   app.add_option("--only", only_name,
                  "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
   app.add_option("--engine", engine, "ode or bullet")->capture_default_str()->check(CLI::IsMember({"ode", "bullet"}));
@@ -58,6 +61,8 @@ int main(int argc, char** argv) {
       throw boxtree::Error("--midphase: builtin, boxtree or both");
     demo::TerrainOptions terrain;
     terrain.cells = cells;
+    for (demo::TerrainKind kind : {demo::TerrainKind::bowl, demo::TerrainKind::rough, demo::TerrainKind::flat})
+      if (terrain_name == demo::terrain_kind_name(kind)) terrain.kind = kind;
     const demo::Scene scene = demo::make_scene(terrain, bodies, seed);
     demo::SimOptions builtin_options;
     builtin_options.max_contacts_per_pair = max_contacts;
@@ -92,9 +97,10 @@ int main(int argc, char** argv) {
       }
     }
     std::printf(
-        "%s drop scene, terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d rounds, "
-        "%d contacts per call at most\n",
-        engine == "bullet" ? "Bullet" : "ODE", cells, bodies, settle, repeats, rounds, max_contacts);
+        "%s drop scene, %s terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d "
+        "rounds, %d contacts per call at most\n",
+        engine == "bullet" ? "Bullet" : "ODE", terrain_name.c_str(), cells, bodies, settle, repeats, rounds,
+        max_contacts);
     std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs",
                 engine == "bullet" ? "Bullet us" : "OPCODE us", "contacts", "triangles", "boxtree us", "contacts",
                 "triangles", "ratio");
