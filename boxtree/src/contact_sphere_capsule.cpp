@@ -197,7 +197,9 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
     // closest pair (x, y). Bisection on the exact overlap test finishes what Newton has not
     // within its steps (a closest pair switching features at t converges only linearly).
     if (distance > r) return 0;
-    Real hi = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
+    // A lift that clears: both ends of the core r above the plane.
+    const Real clears = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
+    Real hi = clears;
     bool converged = false;
     for (int iteration = 0; iteration < 16 && !converged; ++iteration) {
       const SegmentTrianglePair at = closest_segment_triangle(p0 + hi * tri.normal, p1 + hi * tri.normal, tri);
@@ -218,7 +220,7 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
         return segment_triangle_distance_squared(p0 + lift, p1 + lift, a, b, c) <= r * r;
       };
       Real lo = 0;
-      if (!(hi >= 0) || overlaps_at(hi)) hi = r - std::min(tri.signed_distance(p0), tri.signed_distance(p1)) + tiny;
+      if (!(hi >= 0) || overlaps_at(hi)) hi = clears;
       for (int iteration = 0; iteration < 200 && hi - lo > tiny; ++iteration) {
         const Real mid = (lo + hi) / 2;
         (overlaps_at(mid) ? lo : hi) = mid;
