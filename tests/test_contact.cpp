@@ -766,6 +766,48 @@ TEST(ContactReduce, IncrementalHullChoosesAsTheFullRecompute) {
   EXPECT_GT(reduced, scaled(2000) / 2);
 }
 
+// Many contacts (the merge indexes them by x past 32): clusters of copies at distances just under
+// and just over the merge distance, along x and across it, far from the origin too; a budget
+// above the count, so the merge alone decides. The same contacts as the full pairwise scan.
+TEST(ContactReduce, MergeOfManyContactsIsThePairwiseScans) {
+  Random rng(57);
+  int merged = 0;
+  int borderline = 0;
+  for (int trial = 0; trial < scaled(400); ++trial) {
+    const int count = rng.integer(33, 300);
+    const Real merge = trial % 3 == 0 ? 1e-9 : 1e-3;
+    const Real offset = trial % 4 == 0 ? 1e4 : 0;
+    std::vector<ContactPoint> contacts;
+    for (int i = 0; i < count; ++i) {
+      ContactPoint c;
+      c.position = rng.point(-0.05, 0.05);
+      c.position.x() += offset;
+      c.normal = rng.chance(0.8) ? Vec3::UnitZ() : rng.unit_vector();
+      c.depth = rng.uniform(-0.01, 0.1);
+      if (!contacts.empty() && rng.chance(0.5)) {
+        c = contacts[std::size_t(rng.integer(0, int(contacts.size()) - 1))];
+        const Real factor = rng.uniform(0.999999, 1.000001);  // either side of the distance
+        const Vec3 along = rng.chance(0.5) ? Vec3::UnitX() : rng.unit_vector();
+        c.position += merge * factor * along;
+        c.depth -= rng.uniform(1e-7, 1e-6);
+        ++borderline;
+      }
+      c.facet = FacetId(i);
+      contacts.push_back(c);
+    }
+    const std::vector<ContactPoint> expected = reduce_reference(contacts, std::size_t(count), merge);
+    std::vector<ContactPoint> got = contacts;
+    const ReductionCounts counts = reduce_contacts(got, std::size_t(count), merge);
+    ASSERT_EQ(got.size(), expected.size()) << trial;
+    EXPECT_EQ(counts.merged, contacts.size() - got.size()) << trial;
+    EXPECT_EQ(counts.dropped, 0u) << trial;
+    merged += int(counts.merged);
+    for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i].facet, expected[i].facet) << trial << " " << i;
+  }
+  EXPECT_GT(merged, borderline / 4);  // a good share of the copies within the distance merge
+  EXPECT_LT(merged, borderline);      // and not all of them
+}
+
 // ------------------------------------------------------------------------------------------
 // Randomized cross-checks against the exact overlap tests
 

@@ -83,35 +83,43 @@ std::vector<std::uint8_t> compute_active_edges(const TriangleMesh& mesh, Real cr
   return active;
 }
 
-EdgeContact correct_internal_edge_contact(ContactPoint& contact, const Vec3& a, const Vec3& b, const Vec3& c,
-                                          std::uint8_t active_edges) {
-  if (active_edges == 0x7) return EdgeContact::keep;
+InternalEdgeCorrection::InternalEdgeCorrection(const Vec3& a, const Vec3& b, const Vec3& c, std::uint8_t active_edges)
+    : corners_{&a, &b, &c}, active_edges_(active_edges) {
+  if (active_edges == 0x7) return;
   Vec3 n = face_normal(a, b, c);
   const Real len = n.norm();
-  if (!(len > 0)) return EdgeContact::keep;
-  n /= len;
+  if (!(len > 0)) return;
+  normal_ = n / len;
+  for (int k = 0; k < 3; ++k) {
+    edges_[k] = *corners_[(k + 1) % 3] - *corners_[k];
+    edge_squared_[k] = edges_[k].squaredNorm();
+  }
+  scale_ = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  judged_ = true;
+}
+
+EdgeContact InternalEdgeCorrection::operator()(ContactPoint& contact) const {
+  if (!judged_) return EdgeContact::keep;
+  const Vec3& n = normal_;
   const Real cosine = std::abs(contact.normal.dot(n));
   if (cosine >= Real(1) - Real(1e-9)) return EdgeContact::keep;  // already the face normal
   // Which edges the contact's feature lies on, within a tolerance relative to the triangle's
   // size. The feature is the triangle's point closest to the shape's deepest point: for a
   // separated contact the routines' position may be anywhere on the touching patch, while the
   // closest point tells whether the shape is over this facet or beside it.
-  const Vec3 feature = closest_point_on_triangle(contact.point_on_shape(), a, b, c);
-  const Vec3 corners[3] = {a, b, c};
-  const Real scale = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const Vec3 feature = closest_point_on_triangle(contact.point_on_shape(), *corners_[0], *corners_[1], *corners_[2]);
   // A penetrating shape's deepest point is inside the triangle by up to the depth: an edge
   // contact of a shape just crossing the edge still counts as on the edge.
-  const Real tolerance = scale * Real(1e-6) + std::max(contact.depth, Real(0));
+  const Real tolerance = scale_ * Real(1e-6) + std::max(contact.depth, Real(0));
   int on_edges = 0;
   bool touches_active = false;
   for (int k = 0; k < 3; ++k) {
-    const Vec3& p = corners[k];
-    const Vec3& q = corners[(k + 1) % 3];
-    const Vec3 e = q - p;
-    const Real t = std::clamp((feature - p).dot(e) / std::max(e.squaredNorm(), Real(1e-300)), Real(0), Real(1));
+    const Vec3& p = *corners_[k];
+    const Vec3& e = edges_[k];
+    const Real t = std::clamp((feature - p).dot(e) / std::max(edge_squared_[k], Real(1e-300)), Real(0), Real(1));
     if ((p + t * e - feature).norm() <= tolerance) {
       ++on_edges;
-      if (active_edges & (1u << k)) touches_active = true;
+      if (active_edges_ & (1u << k)) touches_active = true;
     }
   }
   // Interior contacts keep their normal (it is a face contact of the shape, e.g. a box corner),
@@ -123,6 +131,11 @@ EdgeContact correct_internal_edge_contact(ContactPoint& contact, const Vec3& a, 
   contact.normal = contact.normal.dot(n) < 0 ? Vec3(-n) : n;
   contact.depth *= cosine;  // the same separation, measured along the face normal
   return EdgeContact::corrected;
+}
+
+EdgeContact correct_internal_edge_contact(ContactPoint& contact, const Vec3& a, const Vec3& b, const Vec3& c,
+                                          std::uint8_t active_edges) {
+  return InternalEdgeCorrection(a, b, c, active_edges)(contact);
 }
 
 }  // namespace boxtree

@@ -30,17 +30,21 @@ void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test,
         const Vec3& c = m.corner(facet, 2);
         const int n = per_facet(a, b, c, options, found);
         result.counts.found += std::size_t(n);
-        for (int i = 0; i < n; ++i) {
-          found[i].facet = facet;
-          if (request.internal_edges) {
-            const EdgeContact verdict = correct_internal_edge_contact(found[i], a, b, c, active[facet]);
-            if (verdict == EdgeContact::discard) {
-              ++result.counts.edge_discarded;
-              continue;  // beside this facet: its neighbour reports the real contact
+        if (n > 0) {
+          const InternalEdgeCorrection correct_edge(a, b, c,
+                                                    request.internal_edges ? active[facet] : std::uint8_t(0x7));
+          for (int i = 0; i < n; ++i) {
+            found[i].facet = facet;
+            if (request.internal_edges) {
+              const EdgeContact verdict = correct_edge(found[i]);
+              if (verdict == EdgeContact::discard) {
+                ++result.counts.edge_discarded;
+                continue;  // beside this facet: its neighbour reports the real contact
+              }
+              if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
             }
-            if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
+            result.contacts.push_back(found[i]);
           }
-          result.contacts.push_back(found[i]);
         }
         return !(request.early_stop && result.contacts.size() >= max_contacts);
       },

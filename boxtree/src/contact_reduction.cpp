@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include "boxtree/contact.h"
 #include "contact_internal.h"
@@ -26,11 +27,60 @@ Real added_area_2d(const Vec2* hull, int h, const Vec2& q) {
   if (h == 1) return 0;
   if (h == 2) return std::abs(cross_2d(hull[0], hull[1], q));
   Real added = 0;
-  for (int i = 0; i < h; ++i) {
-    const Real c = cross_2d(hull[i], hull[(i + 1) % h], q);
+  for (int i = 0, next = 1; i < h; ++i, ++next) {
+    const Real c = cross_2d(hull[i], hull[next == h ? 0 : next], q);
     if (c < 0) added -= c;
   }
   return added;
+}
+
+// Merges near-duplicates (same place within `merge_distance`, normals within ~10 degrees) of
+// contacts sorted deepest first; the deeper one (earlier) stays. Returns how many are kept, in
+// place and in order. A contact can only duplicate a kept one whose x lies within the merge
+// distance of its own, so the kept contacts are indexed in x order and each contact is tested
+// against that window only (O(n log n) for spread contacts instead of O(n * kept)); the window is
+// wider than the distance by more than rounding, so the test decides as the full scan does.
+int merge_near_duplicates(ContactPoint* contacts, int count, Real merge_distance) {
+  const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
+  const Real merge_squared = merge_distance * merge_distance;
+  const auto duplicates = [&](const ContactPoint& c, const ContactPoint& other) {
+    return (c.position - other.position).squaredNorm() <= merge_squared && c.normal.dot(other.normal) >= cos_merge;
+  };
+  // Few contacts, or no order to index by: the full scan.
+  bool scan = count <= 32 || !std::isfinite(merge_squared);
+  for (int i = 0; i < count && !scan; ++i) scan = !std::isfinite(contacts[i].position.x());
+  if (scan) {
+    int kept = 0;
+    for (int i = 0; i < count; ++i) {
+      bool duplicate = false;
+      for (int j = 0; j < kept && !duplicate; ++j) duplicate = duplicates(contacts[i], contacts[j]);
+      if (!duplicate) contacts[kept++] = contacts[i];
+    }
+    return kept;
+  }
+  std::array<int, 256> small;
+  std::vector<int> large;
+  int* by_x = small.data();  // indices of the kept contacts [0, kept), ascending x
+  if (count > int(small.size())) {
+    large.resize(std::size_t(count));
+    by_x = large.data();
+  }
+  const auto x_of = [contacts](int k) { return contacts[k].position.x(); };
+  int kept = 0;
+  for (int i = 0; i < count; ++i) {
+    const ContactPoint c = contacts[i];
+    const Real x = c.position.x();
+    const Real window = merge_distance * (1 + 1e-9) + 1e-15 * std::abs(x);
+    int* p = std::lower_bound(by_x, by_x + kept, x - window, [&](int k, Real v) { return x_of(k) < v; });
+    bool duplicate = false;
+    for (; p != by_x + kept && x_of(*p) <= x + window && !duplicate; ++p) duplicate = duplicates(c, contacts[*p]);
+    if (duplicate) continue;
+    contacts[kept] = c;
+    int* at = std::upper_bound(by_x, by_x + kept, x, [&](Real v, int k) { return v < x_of(k); });
+    std::copy_backward(at, by_x + kept, by_x + kept + 1);
+    *at = kept++;
+  }
+  return kept;
 }
 
 }  // namespace
@@ -39,18 +89,7 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
   if (merged) *merged = 0;
   if (count <= 0) return 0;
   std::sort(contacts, contacts + count, [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
-  // Near-duplicates: same place and normals within ~10 degrees; the deeper one (earlier) stays.
-  const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
-  const Real merge_squared = merge_distance * merge_distance;
-  int kept = 0;
-  for (int i = 0; i < count; ++i) {
-    bool duplicate = false;
-    for (int j = 0; j < kept && !duplicate; ++j) {
-      duplicate = (contacts[i].position - contacts[j].position).squaredNorm() <= merge_squared &&
-                  contacts[i].normal.dot(contacts[j].normal) >= cos_merge;
-    }
-    if (!duplicate) contacts[kept++] = contacts[i];
-  }
+  const int kept = merge_near_duplicates(contacts, count, merge_distance);
   if (merged) *merged = count - kept;
   if (kept <= max_count) return kept;
 
@@ -108,7 +147,7 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
     for (int s = 0; s < selected; ++s) points[s] = planar[order[s]];
     h = detail::convex_hull_2d(points.data(), selected, hull.data());
     area = 0;
-    for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[(i + 1) % h]);
+    for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[i + 1 == h ? 0 : i + 1]);
   }
   std::array<ContactPoint, 64> result;
   for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];

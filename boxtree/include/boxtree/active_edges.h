@@ -37,4 +37,22 @@ enum class EdgeContact {
 EdgeContact correct_internal_edge_contact(ContactPoint& contact, const Vec3& a, const Vec3& b, const Vec3& c,
                                           std::uint8_t active_edges);
 
+// correct_internal_edge_contact for the contacts of one facet, with the facet's normal, size and
+// edges worked out once: the same verdicts and the same corrected contacts. The corners must
+// outlive it.
+class InternalEdgeCorrection {
+ public:
+  InternalEdgeCorrection(const Vec3& a, const Vec3& b, const Vec3& c, std::uint8_t active_edges);
+  EdgeContact operator()(ContactPoint& contact) const;
+
+ private:
+  const Vec3* corners_[3];
+  std::uint8_t active_edges_;
+  bool judged_ = false;  // false: every contact is kept (all edges active, or a degenerate facet)
+  Vec3 normal_ = Vec3::Zero();
+  Vec3 edges_[3];
+  Real edge_squared_[3] = {0, 0, 0};
+  Real scale_ = 0;
+};
+
 }  // namespace boxtree
