@@ -20,11 +20,6 @@ using boxtree::FacetId;
 using boxtree::VertexId;
 
 constexpr Real kPi = 3.14159265358979323846;
-// The generated terrain's width and noise height, and the width a mesh file is scaled to: the
-// bodies' sizes (0.25 to 0.6 m) are chosen for it.
-constexpr Real kTerrainWidth = 40;
-constexpr Real kNoiseHeight = 4;
-constexpr Real kBodyDensity = 500;  // kg/m^3
 
 Real signed_volume(const TriangleMesh& mesh) {
   Real v = 0;
@@ -113,12 +108,14 @@ const char* body_mix_name(BodyMix mix) {
       return "hull64";
     case BodyMix::mesh:
       return "mesh";
+    case BodyMix::primitives_in_turn:
+      return "primitives-in-turn";
   }
   return "?";
 }
 
 bool parse_body_mix(const std::string& name, BodyMix* mix) {
-  for (int m = 0; m <= int(BodyMix::mesh); ++m)
+  for (int m = 0; m <= int(BodyMix::primitives_in_turn); ++m)
     if (name == body_mix_name(BodyMix(m))) {
       *mix = BodyMix(m);
       return true;
@@ -210,15 +207,17 @@ std::shared_ptr<const TriangleMesh> make_demo_terrain(const TerrainOptions& opti
     for (const Vec3& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
     const Real width = std::max(hi.x() - lo.x(), hi.y() - lo.y());
     if (!(width > 0)) throw boxtree::Error(options.mesh_path + ": the mesh has no extent across x and y");
-    const Real scale = kTerrainWidth / width;
+    const Real scale = options.width / width;
     const Vec3 shift((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, lo.z());
     for (Vec3& v : mesh.vertices) v = (v - shift) * scale;
     if (name) *name = options.mesh_path;
   } else {
     if (options.cells < 2 || options.cells > 4096) throw boxtree::Error("--terrain-size must be in [2, 4096]");
+    if (!(options.width > 0) || !(options.noise_height >= 0))
+      throw boxtree::Error("the terrain's width must be positive and its noise height not negative");
     const bool flat = options.kind == TerrainKind::flat;
-    mesh = boxtree::make_terrain(options.cells, options.cells, seed, kTerrainWidth, flat ? 0 : kNoiseHeight);
-    const Real half = kTerrainWidth / 2;
+    mesh = boxtree::make_terrain(options.cells, options.cells, seed, options.width, flat ? 0 : options.noise_height);
+    const Real half = options.width / 2;
     for (Vec3& v : mesh.vertices) {
       v.x() -= half;
       v.y() -= half;
@@ -259,8 +258,9 @@ bool TerrainProbe::height_at(Real x, Real y, Real* z) const {
 
 namespace {
 
-// The body's shape for a draw `pick` in [0, 1) (the mixes' shares, scene.h).
-Shape shape_of(BodyMix mix, Real pick) {
+// The body's shape for a draw `pick` in [0, 1) (the mixes' shares, scene.h), for the scene's
+// `index`th body.
+Shape shape_of(BodyMix mix, Real pick, int index) {
   if (mix == BodyMix::mixed_without_meshes) pick *= 0.88;  // the mixed shares below the meshes'
   switch (mix) {
     case BodyMix::mixed:
@@ -286,6 +286,10 @@ Shape shape_of(BodyMix mix, Real pick) {
       return Shape::convex;
     case BodyMix::mesh:
       return Shape::mesh;
+    case BodyMix::primitives_in_turn: {
+      const Shape in_turn[] = {Shape::sphere, Shape::box, Shape::capsule, Shape::cylinder};
+      return in_turn[index % 4];
+    }
   }
   return Shape::sphere;
 }
@@ -362,9 +366,13 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
   scene.probe = std::make_shared<const TerrainProbe>(scene.terrain);
   const TerrainProbe& probe = *scene.probe;
   // Drop columns on a grid over the middle of the terrain, layer above layer.
-  const Real spacing = 1.5, layer_height = 1.8;
+  const DropLayout& layout = options.layout;
+  const Real spacing = layout.spacing, layer_height = layout.layer_height;
+  if (!(spacing > 0) || !(layout.max_width >= 0))
+    throw boxtree::Error("the drop columns' spacing must be positive and their width not negative");
   // A square of columns as wide as the count needs, at most the middle of the terrain.
-  const Real max_half = std::min(Real(11), 0.3 * (scene.bounds_max - scene.bounds_min).head<2>().minCoeff());
+  const Real max_half =
+      std::min(layout.max_width / 2, 0.3 * (scene.bounds_max - scene.bounds_min).head<2>().minCoeff());
   const int per_side =
       std::clamp(int(std::ceil(std::sqrt(Real(std::max(count, 1))))), 1, int(2 * max_half / spacing) + 1);
   const Real drop_half = spacing * (per_side - 1) / 2;
@@ -374,8 +382,8 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
   const Vec3 mid = (scene.bounds_min + scene.bounds_max) / 2;
   for (int c = 0; c < per_layer; ++c) {
     const Real cx = mid.x() - drop_half + spacing * (c % per_side), cy = mid.y() - drop_half + spacing * (c / per_side);
-    for (Real dx : {-0.8, 0.0, 0.8})
-      for (Real dy : {-0.8, 0.0, 0.8}) {
+    for (Real dx : {-layout.ground_reach, Real(0), layout.ground_reach})
+      for (Real dy : {-layout.ground_reach, Real(0), layout.ground_reach}) {
         Real z;
         if (probe.height_at(cx + dx, cy + dy, &z)) column_top[c] = std::max(column_top[c], z);
       }
@@ -383,30 +391,31 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
   scene.bodies.reserve(std::size_t(std::max(count, 0)));
   for (int i = 0; i < count; ++i) {
     BodySpec b;
-    b.shape = shape_of(options.mix, random.uniform());
+    b.shape = shape_of(options.mix, random.uniform(), i);
     const Real size = random.uniform(0.25, 0.55);
+    const bool one_size = options.mix == BodyMix::primitives_in_turn;  // its sizes: scene.h
     TriangleMesh mesh;
     Real volume = 0;
     switch (b.shape) {
       case Shape::sphere:
-        b.radius = size;
-        volume = 4.0 / 3.0 * kPi * size * size * size;
+        b.radius = one_size ? 0.5 : size;
+        volume = 4.0 / 3.0 * kPi * b.radius * b.radius * b.radius;
         b.colour = {0.85, 0.25, 0.2};
         break;
       case Shape::box:
-        b.half_extents = uniform_z_first(random, 0.5, 1) * size;
+        b.half_extents = one_size ? Vec3(0.5, 0.4, 0.3) : Vec3(uniform_z_first(random, 0.5, 1) * size);
         volume = 8 * b.half_extents.prod();
         b.colour = {0.95, 0.7, 0.2};
         break;
       case Shape::capsule:
-        b.radius = 0.5 * size;
-        b.half_length = random.uniform(0.4, 1) * size;
+        b.radius = one_size ? 0.3 : 0.5 * size;
+        b.half_length = one_size ? 0.5 : random.uniform(0.4, 1) * size;
         volume = kPi * b.radius * b.radius * (2 * b.half_length + 4.0 / 3.0 * b.radius);
         b.colour = {0.3, 0.55, 0.95};
         break;
       case Shape::cylinder:
-        b.radius = random.uniform(0.5, 0.9) * size;
-        b.half_length = random.uniform(0.3, 0.8) * size;
+        b.radius = one_size ? 0.4 : random.uniform(0.5, 0.9) * size;
+        b.half_length = one_size ? 0.3 : random.uniform(0.3, 0.8) * size;
         volume = 2 * kPi * b.radius * b.radius * b.half_length;
         b.colour = {0.6, 0.35, 0.85};
         break;
@@ -441,13 +450,18 @@ Scene make_scene(const SceneOptions& options, std::uint64_t seed) {
     }
     // A little variation in shade so that neighbours of one kind are told apart.
     b.colour = (b.colour * random.uniform(0.8, 1.1)).cwiseMin(1.0);
-    b.mass = kBodyDensity * volume;
+    b.mass = options.body_density * volume;
     const int layer = i / per_layer, column = i % per_layer;
-    const Real x = mid.x() - drop_half + spacing * (column % per_side) + random.uniform(-0.25, 0.25);
-    const Real y = mid.y() - drop_half + spacing * (column / per_side) + random.uniform(-0.25, 0.25);
-    b.position = Vec3(x, y, column_top[column] + 1.2 + layer_height * layer);
+    const Real x = mid.x() - drop_half + spacing * (column % per_side) + random.uniform(-layout.jitter, layout.jitter);
+    const Real y = mid.y() - drop_half + spacing * (column / per_side) + random.uniform(-layout.jitter, layout.jitter);
+    b.position = Vec3(x, y, column_top[column] + layout.clearance + layer_height * layer);
     const Vec3 axis = random.unit_vector();
-    b.orientation = Quat(Eigen::AngleAxis<Real>(random.uniform(0, 2 * kPi), axis));
+    const Real angle = random.uniform(0, 2 * kPi);
+    if (layout.random_orientation) {
+      b.orientation = Quat(Eigen::AngleAxis<Real>(angle, axis));
+    } else if (one_size && b.shape == Shape::capsule) {
+      b.orientation = Quat(Eigen::AngleAxis<Real>(kPi / 2, Vec3::UnitY()));  // lying along x
+    }
     scene.bodies.push_back(std::move(b));
   }
   return scene;

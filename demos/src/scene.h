@@ -43,8 +43,9 @@ struct Pose {
   Quat orientation = Quat::Identity();
 };
 
-// The generated terrain's shape (all are 40 m across, centred on the origin):
-//   bowl   fractal value noise (4 m high) inside a bowl whose rim keeps the bodies from rolling off;
+// The generated terrain's shape (all are TerrainOptions::width across, centred on the origin):
+//   bowl   fractal value noise (TerrainOptions::noise_height high) inside a bowl whose 7 m rim
+//          keeps the bodies from rolling off;
 //   rough  the same noise without the bowl: bodies that roll off its edge leave the scene;
 //   flat   a flat grid at z = 0, triangulated like the others.
 enum class TerrainKind { bowl, rough, flat };
@@ -53,6 +54,9 @@ const char* terrain_kind_name(TerrainKind kind);
 struct TerrainOptions {
   int cells = 128;  // per side; 2 * cells^2 facets
   TerrainKind kind = TerrainKind::bowl;
+  // Across x and y (m); a mesh file is scaled to it. The bodies' sizes (0.25 to 0.55 m) suit 40 m.
+  Real width = 40;
+  Real noise_height = 4;  // of the generated bowl and rough terrains (m), at most
   std::string mesh_path;  // instead of the generated terrain
   char up_axis = 'z';     // of the mesh file: 'y' turns y-up into z-up
 };
@@ -61,16 +65,50 @@ struct TerrainOptions {
 //   mixed                 20% spheres, 20% boxes, 15% capsules, 15% cylinders, 18% convex hulls (stretched
 //                         icosahedra, 12 points), 12% small closed meshes (bumpy spheres and tori);
 //   mixed_without_meshes  the same shares without the meshes;
-//   sphere ... mesh       one kind alone (hull8 ... hull64: hulls of 8 to 64 points on a stretched sphere).
-enum class BodyMix { mixed, mixed_without_meshes, sphere, box, capsule, cylinder, hull8, hull16, hull32, hull64, mesh };
+//   sphere ... mesh       one kind alone (hull8 ... hull64: hulls of 8 to 64 points on a stretched sphere);
+//   primitives_in_turn    sphere, box, capsule, cylinder in turn, one size each (the same bodies on
+//                         every seed, for comparing engines body by body): a sphere of radius 0.5 m,
+//                         a 1 x 0.8 x 0.6 m box, a capsule of radius 0.3 m with a 1 m straight part,
+//                         a cylinder of radius 0.4 m, 0.6 m long.
+enum class BodyMix {
+  mixed,
+  mixed_without_meshes,
+  sphere,
+  box,
+  capsule,
+  cylinder,
+  hull8,
+  hull16,
+  hull32,
+  hull64,
+  mesh,
+  primitives_in_turn
+};
 const char* body_mix_name(BodyMix mix);
 // The mix named by body_mix_name; false for an unknown name.
 bool parse_body_mix(const std::string& name, BodyMix* mix);
+
+// Where the bodies start: columns on a square grid over the middle of the terrain, as many per
+// side as the count needs within `max_width` and the middle 60% of the terrain, filled layer by
+// layer. The defaults give the demo's pile.
+struct DropLayout {
+  Real spacing = 1.5;       // between neighbouring columns (m)
+  Real max_width = 22;      // of the square of columns (m)
+  Real clearance = 1.2;     // of a first-layer body's centre above the highest ground near its column (m)
+  Real ground_reach = 0.8;  // "near": the ground is probed at the column and this far along x and y (m)
+  Real layer_height = 1.8;  // between layers (m)
+  Real jitter = 0.25;       // each body's random offset from its column along x and y, at most (m)
+  // Off: every body starts unrotated, except the capsules of BodyMix::primitives_in_turn, which
+  // lie along x (the straight part level).
+  bool random_orientation = true;
+};
 
 struct SceneOptions {
   TerrainOptions terrain;
   int bodies = 300;
   BodyMix mix = BodyMix::mixed;
+  DropLayout layout;
+  Real body_density = 500;  // kg/m^3: a body's mass is its volume times this
 };
 
 class TerrainProbe;
@@ -88,9 +126,10 @@ struct Scene {
 std::shared_ptr<const TriangleMesh> make_demo_terrain(const TerrainOptions& options, std::uint64_t seed,
                                                       std::string* name = nullptr);
 
-// `options.bodies` bodies of the mix above the middle of the terrain (at most 22 m square), in
-// layers, with random shapes, sizes, orientations and colours; a deterministic function of the
-// options and the seed. The defaults (bowl, mixed) give the demo's scene.
+// `options.bodies` bodies of the mix above the middle of the terrain, placed by `options.layout`,
+// with random shapes, sizes, orientations and colours; a deterministic function of the options
+// and the seed (which also seeds the generated terrain). The defaults (bowl, mixed) give the
+// demo's scene.
 Scene make_scene(const SceneOptions& options, std::uint64_t seed);
 // make_scene with `count` mixed bodies.
 Scene make_scene(const TerrainOptions& options, int count, std::uint64_t seed);

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 #pragma once
-// The drop scene, built twice: a procedural terrain as ODE's own dTriMesh in one world and as the
-// boxtree geom in another, the same bodies dropped onto both. Shared by the scene tests and the
-// timing report (test_drop.cpp).
+// The drop scene, built twice: the scene library's terrain (demos/src/scene.h) as ODE's own
+// dTriMesh in one world and as the boxtree geom in another, the same bodies dropped onto both.
+// Shared by the scene tests and the timing report (test_drop.cpp).
 #include <ode/ode.h>
 
 #include <algorithm>
@@ -10,20 +10,41 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "boxtree/generate.h"
 #include "boxtree/ode/boxtree_geom.h"
+#include "scene.h"
 
 namespace boxtree::ode_test {
 
-// A terrain of 40 x 40 cells (3200 facets) over 40 x 40 units, heights within about 0..4: slopes
-// gentle enough that the bodies below stay where they land (with the rolling friction below).
-inline std::shared_ptr<const TriangleMesh> scene_terrain() {
-  static const auto terrain = std::make_shared<const TriangleMesh>(make_terrain(40, 40, 7, 40, 4));
-  return terrain;
+// The scene library's rough terrain of 40 x 40 cells (3200 facets), 40 m across and centred on
+// the origin, heights within about 0..4 m: slopes gentle enough that the bodies stay where they
+// land (with the rolling friction below). On it, 16 bodies of BodyMix::primitives_in_turn (four
+// of each kind), one per column of a 4 x 4 grid 8 m apart, unrotated (the capsules lying), 1 m
+// above the highest ground within 0.7 m of their column; density 1000 kg/m^3.
+inline demo::SceneOptions drop_scene_options() {
+  demo::SceneOptions options;
+  options.terrain.cells = 40;
+  options.terrain.kind = demo::TerrainKind::rough;
+  options.bodies = 16;
+  options.mix = demo::BodyMix::primitives_in_turn;
+  options.layout.spacing = 8;
+  options.layout.max_width = 24;
+  options.layout.clearance = 1;
+  options.layout.ground_reach = 0.7;
+  options.layout.jitter = 0;
+  options.layout.random_orientation = false;
+  options.body_density = 1000;
+  return options;
 }
+inline const demo::Scene& drop_scene() {
+  static const demo::Scene scene = demo::make_scene(drop_scene_options(), 7);
+  return scene;
+}
+inline std::shared_ptr<const TriangleMesh> scene_terrain() { return drop_scene().terrain; }
 
 // ODE's own trimesh over the same vertices (double precision arrays; OPCODE keeps floats inside).
 // The arrays must outlive the data object, since ODE does not copy them.
@@ -53,26 +74,6 @@ struct OdeTrimesh {
   OdeTrimesh& operator=(const OdeTrimesh&) = delete;
 };
 
-enum class BodyKind { sphere, box, capsule, cylinder };
-inline const char* kind_name(BodyKind kind) {
-  switch (kind) {
-    case BodyKind::sphere:
-      return "sphere";
-    case BodyKind::box:
-      return "box";
-    case BodyKind::capsule:
-      return "capsule";
-    case BodyKind::cylinder:
-      return "cylinder";
-  }
-  return "?";
-}
-
-struct Drop {
-  BodyKind kind;
-  Vec3 position;
-};
-
 // Per step: contacts made and the time spent inside dCollide (the collision work proper; the
 // space's broadphase is the same in both worlds).
 struct StepRecord {
@@ -87,7 +88,9 @@ class DropWorld {
  public:
   static constexpr int kMaxContacts = 16;  // asked per pair, like a typical near callback
 
-  DropWorld(Ground ground, const std::vector<Drop>& drops, const char* method = "aabb") : ground_kind_(ground) {
+  // The drop scene's terrain, and `bodies` (spheres, boxes, capsules and cylinders) on it.
+  DropWorld(Ground ground, const std::vector<demo::BodySpec>& bodies, const char* method = "aabb")
+      : ground_kind_(ground) {
     world_ = dWorldCreate();
     space_ = dHashSpaceCreate(nullptr);
     joints_ = dJointGroupCreate(0);
@@ -103,7 +106,7 @@ class DropWorld {
       ode_ground_ = std::make_unique<OdeTrimesh>(space_, *terrain);
       ground_ = ode_ground_->geom;
     }
-    for (const Drop& d : drops) add_body(d);
+    for (const demo::BodySpec& spec : bodies) add_body(spec);
   }
   ~DropWorld() {
     for (dGeomID g : geoms_) dGeomDestroy(g);
@@ -157,34 +160,36 @@ class DropWorld {
     }
   }
 
-  void add_body(const Drop& d) {
-    dBodyID body = dBodyCreate(world_);
+  void add_body(const demo::BodySpec& spec) {
     dMass mass;
     dGeomID geom = nullptr;
-    dMatrix3 rotation;
-    dRSetIdentity(rotation);
-    switch (d.kind) {
-      case BodyKind::sphere:
-        geom = dCreateSphere(space_, 0.5);
-        dMassSetSphere(&mass, 1000, 0.5);
+    const Real m = spec.mass, r = spec.radius, length = 2 * spec.half_length;
+    const Vec3 sides = 2 * spec.half_extents;
+    switch (spec.shape) {
+      case demo::Shape::sphere:
+        geom = dCreateSphere(space_, r);
+        dMassSetSphereTotal(&mass, m, r);
         break;
-      case BodyKind::box:
-        geom = dCreateBox(space_, 1.0, 0.8, 0.6);
-        dMassSetBox(&mass, 1000, 1.0, 0.8, 0.6);
+      case demo::Shape::box:
+        geom = dCreateBox(space_, sides.x(), sides.y(), sides.z());
+        dMassSetBoxTotal(&mass, m, sides.x(), sides.y(), sides.z());
         break;
-      case BodyKind::capsule:  // lying down: axis along x
-        geom = dCreateCapsule(space_, 0.3, 1.0);
-        dMassSetCapsule(&mass, 1000, 3, 0.3, 1.0);
-        dRFromAxisAndAngle(rotation, 0, 1, 0, M_PI / 2);
+      case demo::Shape::capsule:
+        geom = dCreateCapsule(space_, r, length);
+        dMassSetCapsuleTotal(&mass, m, 3, r, length);
         break;
-      case BodyKind::cylinder:  // standing on a flat end
-        geom = dCreateCylinder(space_, 0.4, 0.6);
-        dMassSetCylinder(&mass, 1000, 3, 0.4, 0.6);
+      case demo::Shape::cylinder:
+        geom = dCreateCylinder(space_, r, length);
+        dMassSetCylinderTotal(&mass, m, 3, r, length);
         break;
+      default:
+        throw std::invalid_argument(std::string("DropWorld: no ") + demo::shape_name(spec.shape) + " bodies");
     }
+    dBodyID body = dBodyCreate(world_);
     dBodySetMass(body, &mass);
-    dBodySetPosition(body, d.position.x(), d.position.y(), d.position.z());
-    dBodySetRotation(body, rotation);
+    dBodySetPosition(body, spec.position.x(), spec.position.y(), spec.position.z());
+    const dQuaternion q = {spec.orientation.w(), spec.orientation.x(), spec.orientation.y(), spec.orientation.z()};
+    dBodySetQuaternion(body, q);
     dGeomSetBody(geom, body);
     bodies_.push_back(body);
     geoms_.push_back(geom);
@@ -284,23 +289,6 @@ inline std::optional<Real> depth_below(const AnyTree& terrain, dGeomID g) {
       depth = std::max(depth.value_or(-1e30), *ground - p.z());
   }
   return depth;
-}
-
-// Four of each kind on a grid over the terrain's interior, 1 unit above the highest ground
-// under their footprint.
-inline std::vector<Drop> scene_drops(const AnyTree& tree) {
-  std::vector<Drop> drops;
-  const BodyKind kinds[] = {BodyKind::sphere, BodyKind::box, BodyKind::capsule, BodyKind::cylinder};
-  int index = 0;
-  for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 4; ++i, ++index) {
-      const Real x = 8 + 8 * i, y = 8 + 8 * j;
-      Real ground = -1e9;
-      for (Real dx : {-0.7, 0.0, 0.7})
-        for (Real dy : {-0.7, 0.0, 0.7}) ground = std::max(ground, terrain_height(tree, x + dx, y + dy));
-      drops.push_back({kinds[index % 4], Vec3(x, y, ground + 1.0)});
-    }
-  return drops;
 }
 
 }  // namespace boxtree::ode_test

@@ -45,7 +45,7 @@ Summary summarize(const std::vector<StepRecord>& steps) {
 void run_scene(const char* method) {
   const auto terrain = scene_terrain();
   const AnyTree reference = AnyTree::build(terrain, parse_method("aabb"));
-  const std::vector<Drop> drops = scene_drops(reference);
+  const std::vector<demo::BodySpec>& drops = drop_scene().bodies;
   DropWorld ode_world(Ground::ode_trimesh, drops);
   DropWorld bt_world(Ground::boxtree, drops, method);
   std::vector<StepRecord> ode_steps, bt_steps;
@@ -76,12 +76,12 @@ void run_scene(const char* method) {
   std::printf("[ drop     ] %-9s %9s %9s | %9s %9s %9s | %8s\n", "body", "x", "y", "z(ODE)", "z(bt)", "dz", "ground");
   Real deepest = -1e30, ode_deepest = -1e30, shallowest = 1e30;
   for (std::size_t i = 0; i < drops.size(); ++i) {
-    SCOPED_TRACE(std::string(kind_name(drops[i].kind)) + " #" + std::to_string(i));
+    SCOPED_TRACE(std::string(demo::shape_name(drops[i].shape)) + " #" + std::to_string(i));
     const dReal* po = dBodyGetPosition(ode_world.bodies()[i]);
     const dReal* pb = dBodyGetPosition(bt_world.bodies()[i]);
     const Real ground = terrain_height(reference, pb[0], pb[1]);
-    std::printf("[ drop     ] %-9s %9.3f %9.3f | %9.4f %9.4f %9.4f | %8.3f\n", kind_name(drops[i].kind), pb[0], pb[1],
-                po[2], pb[2], pb[2] - po[2], ground);
+    std::printf("[ drop     ] %-9s %9.3f %9.3f | %9.4f %9.4f %9.4f | %8.3f\n", demo::shape_name(drops[i].shape), pb[0],
+                pb[1], po[2], pb[2], pb[2] - po[2], ground);
     // At rest in both worlds.
     for (const DropWorld* w : {&ode_world, &bt_world}) {
       const dReal* v = dBodyGetLinearVel(w->bodies()[i]);
@@ -89,7 +89,7 @@ void run_scene(const char* method) {
       // Known limitation: contact_convex_triangle (cylinders) gives one contact per facet, and
       // its position is not at the shape's deepest point (libccd's EPA position), so a standing
       // cylinder keeps a small jitter (position still within a few mm, checked below).
-      const Real v_max = (w == &bt_world && drops[i].kind == BodyKind::cylinder) ? 0.2 : 0.05;
+      const Real v_max = (w == &bt_world && drops[i].shape == demo::Shape::cylinder) ? 0.2 : 0.05;
       EXPECT_LT(Vec3(v[0], v[1], v[2]).norm(), v_max) << (w == &ode_world ? "ODE trimesh" : "boxtree");
       EXPECT_LT(Vec3(av[0], av[1], av[2]).norm(), 0.2) << (w == &ode_world ? "ODE trimesh" : "boxtree");
     }
@@ -115,9 +115,7 @@ TEST(OdeDrop, SameRestHeightsAsOdeTrimesh_aabb) { run_scene("aabb"); }
 // Collision time per call and per body kind, with every body at rest (after the drop): each
 // pair's dCollide repeated, so that the figures do not depend on one noisy step.
 TEST(OdeDrop, CollisionTimePerBodyKind) {
-  const auto terrain = scene_terrain();
-  const AnyTree reference = AnyTree::build(terrain, parse_method("aabb"));
-  const std::vector<Drop> drops = scene_drops(reference);
+  const std::vector<demo::BodySpec>& drops = drop_scene().bodies;
   const char* methods[] = {"aabb", "obb-min", "pie-min+aabb@3"};
   std::vector<std::unique_ptr<DropWorld>> worlds;
   worlds.push_back(std::make_unique<DropWorld>(Ground::ode_trimesh, drops));
@@ -129,13 +127,13 @@ TEST(OdeDrop, CollisionTimePerBodyKind) {
   for (const char* m : methods) std::printf(" %16s", m);
   std::printf("\n");
   const int repeats = 100;
-  for (BodyKind kind : {BodyKind::sphere, BodyKind::box, BodyKind::capsule, BodyKind::cylinder}) {
-    std::printf("[ time     ] %-9s", kind_name(kind));
+  for (demo::Shape kind : {demo::Shape::sphere, demo::Shape::box, demo::Shape::capsule, demo::Shape::cylinder}) {
+    std::printf("[ time     ] %-9s", demo::shape_name(kind));
     for (auto& w : worlds) {
       double seconds = 0;
       int contacts = 0, calls = 0;
       for (std::size_t i = 0; i < drops.size(); ++i) {
-        if (drops[i].kind != kind) continue;
+        if (drops[i].shape != kind) continue;
         dContact c[DropWorld::kMaxContacts];
         const auto start = std::chrono::steady_clock::now();
         for (int r = 0; r < repeats; ++r)
@@ -171,7 +169,7 @@ TEST(OdeDrop, ClosedMeshComesToRest) {
     dMass mass;
     dMassSetSphere(&mass, 1000, 1.0);
     dBodySetMass(body, &mass);
-    const Real x = 21, y = 17;
+    const Real x = 1, y = -3;
     const Real ground = terrain_height(reference, x, y);
     dBodySetPosition(body, x, y, ground + 2.5);
     std::unique_ptr<OdeTrimesh> rock_trimesh;
@@ -217,7 +215,7 @@ TEST(OdeDrop, UnregisteredHullsRestOnTheTerrain) {
   DropWorld world(Ground::boxtree, {});
   std::vector<dGeomID> hulls;
   for (int i = 0; i < 16; ++i) {
-    const Real x = 8 + 7 * (i % 4), y = 8 + 7 * (i / 4);
+    const Real x = -12 + 7 * (i % 4), y = -12 + 7 * (i / 4);
     dBodyID body = dBodyCreate(world.world());
     dMass mass;
     dMassSetBox(&mass, 500, 0.6, 0.6, 0.6);

@@ -4,6 +4,7 @@
 // it), and the scene options give what they say.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include "boxtree/error.h"
+#include "boxtree/generate.h"
 #include "hull.h"
 #include "scene.h"
 
@@ -169,6 +171,72 @@ TEST(Scene, TerrainKinds) {
     }
     EXPECT_FALSE(demo::over_terrain(scene, {21, 0, 0}));
   }
+}
+
+TEST(Scene, TerrainWidthAndNoiseHeight) {
+  demo::SceneOptions options = small_scene(demo::BodyMix::sphere, 10);
+  options.terrain.kind = demo::TerrainKind::rough;
+  options.terrain.width = 50;
+  options.terrain.noise_height = 6;
+  const demo::Scene scene = demo::make_scene(options, 4);
+  EXPECT_DOUBLE_EQ(scene.bounds_min.x(), -25);
+  EXPECT_DOUBLE_EQ(scene.bounds_max.y(), 25);
+  const double height = scene.bounds_max.z() - scene.bounds_min.z();
+  EXPECT_GT(height, 4);  // more than the default noise's 4 m at most
+  EXPECT_LE(height, 6);
+  // The same heights as boxtree::make_terrain's, moved to the origin.
+  const demo::TriangleMesh plain = boxtree::make_terrain(16, 16, 4, 50, 6);
+  ASSERT_EQ(plain.vertices.size(), scene.terrain->vertices.size());
+  for (std::size_t v = 0; v < plain.vertices.size(); ++v)
+    EXPECT_EQ(scene.terrain->vertices[v], plain.vertices[v] - demo::Vec3(25, 25, 0)) << v;
+}
+
+TEST(Scene, PrimitivesInTurnOnAGridLayout) {
+  demo::SceneOptions options = small_scene(demo::BodyMix::primitives_in_turn, 16);
+  options.terrain.kind = demo::TerrainKind::rough;
+  options.layout.spacing = 8;
+  options.layout.max_width = 24;
+  options.layout.clearance = 1;
+  options.layout.jitter = 0;
+  options.layout.random_orientation = false;
+  options.body_density = 1000;
+  const demo::Scene scene = demo::make_scene(options, 7);
+  ASSERT_EQ(scene.bodies.size(), 16u);
+  const demo::Shape in_turn[] = {demo::Shape::sphere, demo::Shape::box, demo::Shape::capsule, demo::Shape::cylinder};
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    SCOPED_TRACE(i);
+    const demo::BodySpec& b = scene.bodies[i];
+    EXPECT_EQ(b.shape, in_turn[i % 4]);
+    // One column each, 8 m apart, centred: x and y in -12, -4, 4, 12.
+    EXPECT_DOUBLE_EQ(b.position.x(), -12 + 8.0 * double(i % 4));
+    EXPECT_DOUBLE_EQ(b.position.y(), -12 + 8.0 * double(i / 4));
+    const auto depth = demo::depth_below_terrain(*scene.probe, b, {b.position, b.orientation});
+    ASSERT_TRUE(depth);
+    EXPECT_LT(*depth, -0.3) << "bodies start above the ground";
+    const double capsule_tilt = b.shape == demo::Shape::capsule ? std::acos(-1.0) / 2 : 0.0;
+    EXPECT_NEAR(Eigen::AngleAxis<double>(b.orientation).angle(), capsule_tilt, 1e-12);
+  }
+  const demo::BodySpec &sphere = scene.bodies[0], &box = scene.bodies[1], &capsule = scene.bodies[2],
+                       &cylinder = scene.bodies[3];
+  EXPECT_EQ(sphere.radius, 0.5);
+  EXPECT_EQ(box.half_extents, demo::Vec3(0.5, 0.4, 0.3));
+  EXPECT_EQ(capsule.radius, 0.3);
+  EXPECT_EQ(capsule.half_length, 0.5);
+  EXPECT_EQ(cylinder.radius, 0.4);
+  EXPECT_EQ(cylinder.half_length, 0.3);
+  EXPECT_NEAR(box.mass, 1000 * 1.0 * 0.8 * 0.6, 1e-9);
+  // The capsule lies along x.
+  EXPECT_NEAR(std::abs((capsule.orientation * demo::Vec3::UnitZ()).x()), 1, 1e-12);
+  // The same bodies on another seed; only the terrain under them (and so their heights) changes.
+  const demo::Scene other = demo::make_scene(options, 8);
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    EXPECT_EQ(other.bodies[i].radius, scene.bodies[i].radius);
+    EXPECT_EQ(other.bodies[i].half_extents, scene.bodies[i].half_extents);
+    EXPECT_EQ(other.bodies[i].position.head<2>(), scene.bodies[i].position.head<2>());
+  }
+  demo::BodyMix parsed = demo::BodyMix::mixed;
+  EXPECT_TRUE(demo::parse_body_mix("primitives-in-turn", &parsed));
+  EXPECT_EQ(parsed, demo::BodyMix::primitives_in_turn);
 }
 
 }  // namespace
