@@ -85,15 +85,28 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     const Real depth = plane - normal.dot(x);
     out[count++] = make_contact(x + depth * normal, normal, depth);
   };
-  for (int i = 0; i < shape.vertex_count; ++i) {
-    if (inside_prism(shape.vertices[i], -1)) add(shape.vertices[i]);
+  // The corners' signed distances to the walls, worked out once (up to kCachedCorners corners):
+  // every corner is on three or more edges, which read the same values.
+  constexpr int kCachedCorners = 64;
+  std::array<std::array<Real, 3>, kCachedCorners> wall_distance;
+  const bool cached = shape.vertex_count <= kCachedCorners;
+  for (int v = 0; cached && v < shape.vertex_count; ++v) {
+    for (int i = 0; i < 3; ++i) wall_distance[v][i] = walls[i].dot(shape.vertices[v] - tri.v[i]);
+  }
+  const auto distance = [&](int v, int i) {
+    return cached ? wall_distance[v][i] : walls[i].dot(shape.vertices[v] - tri.v[i]);
+  };
+  for (int v = 0; v < shape.vertex_count; ++v) {
+    bool inside = true;
+    for (int i = 0; i < 3 && inside; ++i) inside = !(distance(v, i) < -slack);
+    if (inside) add(shape.vertices[v]);
   }
   for (int e = 0; e < shape.edge_count; ++e) {
     const Vec3& p = shape.vertices[shape.edge_from[e]];
     const Vec3& q = shape.vertices[shape.edge_to[e]];
     for (int i = 0; i < 3; ++i) {
-      const Real fp = walls[i].dot(p - tri.v[i]);
-      const Real fq = walls[i].dot(q - tri.v[i]);
+      const Real fp = distance(shape.edge_from[e], i);
+      const Real fq = distance(shape.edge_to[e], i);
       if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
       const Vec3 x = p + (fp / (fp - fq)) * (q - p);
       if (inside_prism(x, i)) add(x);
@@ -289,11 +302,14 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
     consider(best_face, {-box.faces[2 * k].normal, along_minus, AxisKind::kShapeFace, 2 * k, 0});
     consider(best_face, {-box.faces[2 * k + 1].normal, along_plus, AxisKind::kShapeFace, 2 * k + 1, 0});
   }
+  constexpr int kNext[3] = {1, 2, 0};
+  constexpr int kAfterNext[3] = {2, 0, 1};
+  const Vec3 local_edges[3] = {local[1] - local[0], local[2] - local[1], local[0] - local[2]};
   for (int k = 0; k < 3; ++k) {
-    const int i = (k + 1) % 3;
-    const int j = (k + 2) % 3;
+    const int i = kNext[k];
+    const int j = kAfterNext[k];
     for (int t = 0; t < 3; ++t) {
-      const Vec3 e = local[(t + 1) % 3] - local[t];
+      const Vec3& e = local_edges[t];
       // u = e_k x e: component k is zero, (i, j) are (-e_j, e_i).
       Vec3 u = Vec3::Zero();
       u[i] = -e[j];
@@ -313,7 +329,7 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
         // The normal as the general loop makes it, from the world's edge: exactly across the
         // box's edges even when the axes are orthonormal to single precision only (an engine's
         // rotation), where A u would lean by ~1e-7 and edge_contacts could miss the edge pair.
-        const Vec3 world = box.axes.col(k).cross(tri.v[(t + 1) % 3] - tri.v[t]);
+        const Vec3 world = box.axes.col(k).cross(tri.v[kNext[t]] - tri.v[t]);
         const Real world_length = world.norm();
         if (!(world_length > 0)) continue;
         const Vec3 n = world / world_length;
