@@ -182,12 +182,10 @@ Measure build_embree(const boxtree::TriangleMesh& mesh) {
   return m;
 }
 
-std::vector<std::string> split(const std::string& list) {
-  std::vector<std::string> out;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
+// "a,b,c": a list as the options take it.
+std::string comma_list(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : ",") + item;
   return out;
 }
 
@@ -197,43 +195,48 @@ int main(int argc, char** argv) {
   CLI::App app{"Build time and memory: boxtree methods vs Bullet, FCL, Embree on terrains (single thread)"};
   bool quick = false;
   std::string json_path, markdown_path, plot_dir, csv_path, meshes_dir;
-  std::string methods_list =
-      "aabb,aabb-exact,obb-all,obb-max,obb-min,pie-max,pie-min,pie-min-exact,pie-max-general,pie-min-general";
-  std::string large_methods_list = "aabb,aabb-exact,obb-all";
-  std::string sizes_list;
+  std::vector<std::string> methods = {"aabb",    "aabb-exact", "obb-all",       "obb-max",         "obb-min",
+                                      "pie-max", "pie-min",    "pie-min-exact", "pie-max-general", "pie-min-general"};
+  std::vector<std::string> large_methods = {"aabb", "aabb-exact", "obb-all"};
+  std::vector<std::size_t> sizes;
   std::size_t large_from = 500000;
   std::uint64_t seed = 1;
   int min_repeats = 1;
   bool skip_peers = false;
-  std::string peers_list = "bullet,fcl,embree";
+  std::vector<std::string> peer_names = {"bullet", "fcl", "embree"};
   app.add_flag("--skip-peers", skip_peers, "build boxtree trees only (for profiling)");
-  app.add_option("--peers", peers_list, "which peers to build: comma-separated subset of bullet,fcl,embree");
+  app.add_option("--peers", peer_names, "which peers to build: comma-separated subset of bullet,fcl,embree")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   app.add_flag("--quick", quick, "small run for CI: 10k and 100k facets, methods aabb and obb-all");
   app.add_option("--json", json_path, "write the result rows (JSON array) here");
   app.add_option("--markdown", markdown_path, "write the section's markdown fragment here");
   app.add_option("--csv", csv_path, "write one line per (size, engine) here");
   app.add_option("--plot-dir", plot_dir, "write the CSV and PNG plots (build time, bytes per facet vs n) here");
   app.add_option("--meshes", meshes_dir, "unused (terrains are generated); accepted for a uniform command line");
-  app.add_option("--methods", methods_list, "boxtree methods below --large-from facets");
-  app.add_option("--large-methods", large_methods_list, "boxtree methods from --large-from facets up");
+  app.add_option("--methods", methods, "boxtree methods below --large-from facets")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  app.add_option("--large-methods", large_methods, "boxtree methods from --large-from facets up")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   app.add_option("--large-from", large_from, "facet count from which only --large-methods are built");
-  app.add_option("--sizes", sizes_list, "comma-separated facet counts (default 10000,100000,1000000,4000000)");
+  app.add_option("--sizes", sizes, "comma-separated facet counts (default 10000,100000,1000000,4000000)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   app.add_option("--seed", seed, "terrain seed");
   app.add_option("--ranking", g_ranking,
                  "candidate ranking of the oriented kinds (BuildSettings::ranking; default: the library's)")
       ->check(CLI::IsMember({"merged-volume", "bounding-box"}));
   app.add_option("--repeats", min_repeats, "build every mesh at least this many times and keep the fastest build");
   CLI11_PARSE(app, argc, argv);
-  if (sizes_list.empty()) sizes_list = quick ? "10000,100000" : "10000,100000,1000000,4000000";
-  if (quick && app.count("--methods") == 0) methods_list = "aabb,obb-all";
-  std::vector<std::string> methods = split(methods_list), large_methods = split(large_methods_list);
-  const std::vector<std::string> peer_names = split(peers_list);
+  if (sizes.empty())
+    sizes = quick ? std::vector<std::size_t>{10000, 100000} : std::vector<std::size_t>{10000, 100000, 1000000, 4000000};
+  if (quick && app.count("--methods") == 0) methods = {"aabb", "obb-all"};
   const auto peer_wanted = [&](const char* name) {
     return !skip_peers && std::find(peer_names.begin(), peer_names.end(), name) != peer_names.end();
   };
-  std::vector<std::size_t> sizes;
   try {
-    for (const auto& s : split(sizes_list)) sizes.push_back(std::stoull(s));
     for (const auto& list : {methods, large_methods})
       for (const auto& m : list) {
         // aabb-exact, pie-...-exact: the bench-only exact trees
@@ -274,7 +277,7 @@ int main(int argc, char** argv) {
         "`rtcNewScene`..`rtcCommitScene` (device \"threads=1\", medium quality).\n"
         "- Ratios: boxtree / peer, lower is better for both (below 1: boxtree builds faster / uses less memory).\n"
         "- Methods built: "
-     << methods_list << " below " << with_commas(large_from) << " facets, " << large_methods_list
+     << comma_list(methods) << " below " << with_commas(large_from) << " facets, " << comma_list(large_methods)
      << " from there up (the others are too slow to build at that size within the suite's time budget; see the "
         "per-facet build times of the smaller sizes).\n\n";
 

@@ -193,32 +193,27 @@ int main(int argc, char** argv) {
   CLI::App app{"Drop scene in Bullet and ODE: built-in mesh midphase vs boxtree, in one run"};
   bool quick = false;
   std::string json_path, markdown_path;
-  std::string methods_text = "aabb,obb-min-tight";
-  std::string engines_text = "bullet,ode";
+  std::vector<std::string> methods = {"aabb", "obb-min-tight"};
+  std::vector<std::string> engines = {"bullet", "ode"};
   int steps = 240;
   std::uint64_t seed = 1;
   std::vector<int> only_bodies;
   app.add_flag("--quick", quick, "One small scene, aabb and obb-min only, 90 steps (CI)");
   app.add_option("--json", json_path, "Write the rows (bench/results.json schema) here");
   app.add_option("--markdown", markdown_path, "Write the tables as a markdown fragment here");
-  app.add_option("--methods", methods_text, "Comma-separated boxtree methods (small terrains; aabb only on large ones)")
+  app.add_option("--methods", methods, "Comma-separated boxtree methods (small terrains; aabb only on large ones)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
       ->capture_default_str();
-  app.add_option("--engines", engines_text, "bullet, ode or both")->capture_default_str();
+  app.add_option("--engines", engines, "bullet, ode or both")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->capture_default_str();
   app.add_option("--steps", steps, "Steps per run (the last two thirds are measured)")->capture_default_str();
   app.add_option("--seed", seed, "Scene seed")->capture_default_str();
   app.add_option("--bodies", only_bodies, "Run only the scenes with these body counts (100, 500, 1000, 2000)")
       ->delimiter(',');
   CLI11_PARSE(app, argc, argv);
-
-  auto split = [](const std::string& text) {
-    std::vector<std::string> out;
-    std::stringstream in(text);
-    for (std::string item; std::getline(in, item, ',');)
-      if (!item.empty()) out.push_back(item);
-    return out;
-  };
-  std::vector<std::string> methods = split(methods_text);
-  const std::vector<std::string> engines = split(engines_text);
   std::vector<Config> configs = {{128, 100, true}, {256, 500, true}, {512, 1000, false}, {1024, 2000, false}};
   if (quick) {
     configs = {{64, 60, true}};

@@ -99,26 +99,22 @@ bool same_poses(const std::vector<demo::Pose>& a, const std::vector<demo::Pose>&
 
 double ratio(double x, double y) { return y > 0 ? x / y : std::nan(""); }
 
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"A resting pile of meshes, Bullet and ODE with boxtree: mesh-vs-mesh fronts vs fresh descents"};
-  std::string json_path, markdown_path, engines_text = "bullet,ode";
+  std::string json_path, markdown_path;
+  std::vector<std::string> engines = {"bullet", "ode"};
   int bodies = 50, cells = 128;
   double settle_seconds = 6, rest_seconds = 2;
   std::uint64_t seed = 1;
   bool quick = false;
   app.add_option("--json", json_path, "Write the rows here (bench/report.py's row format)");
   app.add_option("--markdown", markdown_path, "Write the table as a markdown fragment here");
-  app.add_option("--engines", engines_text, "bullet, ode or both")->capture_default_str();
+  app.add_option("--engines", engines, "bullet, ode or both")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->capture_default_str();
   app.add_option("--bodies", bodies, "Mesh bodies in the pile")->capture_default_str();
   app.add_option("--cells", cells, "Terrain cells per side (2 x cells^2 facets)")->capture_default_str();
   app.add_option("--settle-seconds", settle_seconds, "Unmeasured fall and settling")->capture_default_str();
@@ -127,7 +123,6 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "A smoke run: 18 bodies, short phases");
   CLI11_PARSE(app, argc, argv);
   if (quick) bodies = 18, settle_seconds = 1, rest_seconds = 0.25;
-  const std::vector<std::string> engines = split(engines_text);
   const int settle_steps = int(std::lround(settle_seconds / kTimeStep));
   const int steps = std::max(1, int(std::lround(rest_seconds / kTimeStep)));
 

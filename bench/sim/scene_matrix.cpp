@@ -355,26 +355,22 @@ nlohmann::json rows(const std::vector<Cell>& cells) {
   return out;
 }
 
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"The drop scene in many variants, Bullet and ODE: built-in mesh midphase vs boxtree, in one run"};
-  std::string json_path, markdown_path, engines_text = "bullet,ode", only;
+  std::string json_path, markdown_path, only;
+  std::vector<std::string> engines = {"bullet", "ode"};
   int cells = 256;
   double settle_seconds = 1, rest_seconds = 1;
   std::uint64_t seed = 1;
   bool quick = false, list = false;
   app.add_option("--json", json_path, "Write the rows here");
   app.add_option("--markdown", markdown_path, "Write the tables as a markdown fragment here");
-  app.add_option("--engines", engines_text, "bullet, ode or both")->capture_default_str();
+  app.add_option("--engines", engines, "bullet, ode or both")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->capture_default_str();
   app.add_option("--only", only, "Run only the scenes whose name contains this text (see --list)");
   app.add_option("--cells", cells, "Terrain cells per side (2 x cells^2 facets)")->capture_default_str();
   app.add_option("--settle-seconds", settle_seconds, "Unmeasured steps between the phases")->capture_default_str();
@@ -383,7 +379,6 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "A smoke run: 64x64 terrains, 40 bodies, short phases");
   app.add_flag("--list", list, "Print the scenes' names and exit");
   CLI11_PARSE(app, argc, argv);
-  const std::vector<std::string> engines = split(engines_text);
   for (const std::string& e : engines)
     if (e != "bullet" && e != "ode") {
       std::fprintf(stderr, "scene_matrix: unknown engine '%s' (bullet, ode)\n", e.c_str());

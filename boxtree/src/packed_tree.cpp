@@ -249,6 +249,14 @@ Aabb bounding_aabb(const Capsule& capsule) {
           capsule.p0.cwiseMax(capsule.p1).array() + capsule.radius};
 }
 
+#if defined(__SSE2__)
+// One grid axis of a node's four children (`p`: node.min[i] or node.max[i]) as four floats,
+// exact (the grid values are below 2^16).
+__m128 grid_lanes(const std::uint16_t* p) {
+  return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), _mm_setzero_si128()));
+}
+#endif
+
 // The three face axes of an oriented box as separating axes for four children at once, in
 // single precision on the grid: with the box's bounding box on the grid (GridBox, the three
 // world axes) these are the six face axes of the box-box test; the nine edge-edge axes are left
@@ -290,13 +298,9 @@ struct GridObbAxes {
   unsigned overlaps(const PackedAabbTree::Node& node, unsigned mask) const {
     if (!enabled || mask == 0) return mask;
 #if defined(__SSE2__)
-    const __m128i zero = _mm_setzero_si128();
-    const auto lanes = [&](const std::uint16_t* p) {
-      return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero));
-    };
     __m128 sum[3], diff[3];
     for (int i = 0; i < 3; ++i) {
-      const __m128 lo = lanes(node.min[i]), hi = lanes(node.max[i]);
+      const __m128 lo = grid_lanes(node.min[i]), hi = grid_lanes(node.max[i]);
       sum[i] = _mm_add_ps(lo, hi);
       diff[i] = _mm_sub_ps(hi, lo);
     }
@@ -371,15 +375,11 @@ struct GridSphere {
     if (!enabled || mask == 0) return mask;
     constexpr float kSlack = 1.0f / 32;
 #if defined(__SSE2__)
-    const __m128i zero = _mm_setzero_si128();
-    const auto lanes = [&](const std::uint16_t* p) {
-      return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero));
-    };
     __m128 distance2 = _mm_setzero_ps();
     for (int i = 0; i < 3; ++i) {
       const __m128 c = _mm_set1_ps(center[i]);
-      const __m128 below = _mm_sub_ps(lanes(node.min[i]), c);  // > 0: the centre is below the box
-      const __m128 above = _mm_sub_ps(c, lanes(node.max[i]));  // > 0: the centre is above it
+      const __m128 below = _mm_sub_ps(grid_lanes(node.min[i]), c);  // > 0: the centre is below the box
+      const __m128 above = _mm_sub_ps(c, grid_lanes(node.max[i]));  // > 0: the centre is above it
       const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_max_ps(below, above), _mm_set1_ps(kSlack)), _mm_setzero_ps());
       const __m128 world = _mm_mul_ps(gap, _mm_set1_ps(step[i]));
       distance2 = _mm_add_ps(distance2, _mm_mul_ps(world, world));

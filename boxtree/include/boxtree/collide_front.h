@@ -40,12 +40,9 @@
 // engine adapters' default); the other layouts have no front (collider.h's collide_meshes
 // descends fresh for them).
 //
-// Cost, measured (bench/sim/mesh_pile.cpp, 50 resting meshes of ~270 facets on a 32k-facet bowl,
-// bodies awake): volume tests per step 0.06x a fresh descent's in ODE, 0.37x in Bullet (whose
-// resting meshes jitter more, so more records expire), but collision time 1.2x and 1.8x: every
-// record of the front is visited on every call (~250 per pair there), and that costs more than
-// the packed walk's four-boxes-at-once culling saves. Skipping whole subtrees of records that
-// are all still apart would be the next step. The engine adapters leave it off by default.
+// The engine adapters leave it off by default: on a resting pile it tests far fewer volumes than
+// a fresh descent but takes longer, since every record of the front is visited on every call
+// (figures: bench/RESULTS.md, "Notes from earlier measurements").
 #include <cstdint>
 #include <vector>
 
