@@ -1003,8 +1003,7 @@ Outcome collide_through_facets(const PackedAabbTree& a, const PackedAabbTree& b,
       },
       &local, FacetTest::leaf_volume);
   if (gathered.size() > limit) return Outcome::too_many;
-  const TriangleMesh& mesh_a = a.mesh();
-  const TriangleMesh& mesh_b = b.mesh();
+  detail::FacetPairTest facets_intersect(a.mesh(), b.mesh(), a_from_b);
   const TriangleMesh& large_mesh = large.mesh();
   bool stop = false;
   for (const FacetId f : gathered) {
@@ -1017,7 +1016,7 @@ Outcome collide_through_facets(const PackedAabbTree& a, const PackedAabbTree& b,
         [&](FacetId g) {
           const FacetId fa = a_is_large ? f : g, fb = a_is_large ? g : f;
           ++local.leaf_tests;
-          if (!detail::facets_intersect(mesh_a, fa, mesh_b, fb, a_from_b)) return true;
+          if (!facets_intersect(fa, fb)) return true;
           stop = !visit(FacetPair{fa, fb}) || settings.stop_at_first;
           return !stop;
         },
@@ -1037,8 +1036,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
   StatsSink sink(stats);
   QueryStats& local = sink.local;
   if (collide_through_facets(a, b, a_from_b, visit, local, settings) != Outcome::too_many) return;
-  const TriangleMesh& mesh_a = a.mesh();
-  const TriangleMesh& mesh_b = b.mesh();
+  detail::FacetPairTest facets_intersect(a.mesh(), b.mesh(), a_from_b);
   const RigidTransform b_from_a = a_from_b.inverse();
   struct Pair {
     NodeRef a, b;
@@ -1068,7 +1066,7 @@ void collide(const PackedAabbTree& a, const PackedAabbTree& b, const RigidTransf
       const FacetId fa = PackedAabbTree::facet(link_a);
       const FacetId fb = PackedAabbTree::facet(link_b);
       ++local.leaf_tests;
-      if (detail::facets_intersect(mesh_a, fa, mesh_b, fb, a_from_b)) {
+      if (facets_intersect(fa, fb)) {
         if (!visit(FacetPair{fa, fb}) || settings.stop_at_first) return;
       }
       continue;
