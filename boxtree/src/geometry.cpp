@@ -414,7 +414,9 @@ bool triangles_intersect_exact(const Vec3& a0, const Vec3& a1, const Vec3& a2, c
 
 namespace detail {
 
-bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b) {
+// The body of both triangles_intersect: inline, so that the one on six corners runs it on
+// triangles prepared in its own registers and stack.
+inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b) {
   // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
   // pairs of a tree walk end here.
   if ((a.hi_.array() < b.lo_.array()).any() || (b.hi_.array() < a.lo_.array()).any()) return false;
@@ -467,12 +469,14 @@ bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b) {
   return true;
 }
 
+bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b) { return intersect_prepared(a, b); }
+
 }  // namespace detail
 
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                          const Vec3& b2) {
   detail::PreparedTriangle a(a0, a1, a2), b(b0, b1, b2);
-  return detail::triangles_intersect(a, b);
+  return detail::intersect_prepared(a, b);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -41,8 +41,7 @@ class ObbTriangleTest {
 // One triangle of triangles_intersect as that test uses it, prepared once for the pairs that
 // share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box at
 // once, the rounded plane through its corners (detail::PlaneSide's normal and magnitudes) when a
-// pair first needs it. Holds pointers to the corners, which must outlive it. Defined in
-// geometry.cpp.
+// pair first needs it. Holds pointers to the corners, which must outlive it.
 class PreparedTriangle {
  public:
   PreparedTriangle() = default;
@@ -57,15 +56,16 @@ class PreparedTriangle {
   }
 
  private:
-  friend bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b);
+  friend inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b);  // geometry.cpp only
   const Vec3* corner_[3] = {nullptr, nullptr, nullptr};
   Vec3 lo_, hi_;
   Vec3 normal_, magnitude_;  // valid when has_plane_
   bool has_plane_ = false;
 };
 
-// triangles_intersect (geometry.h) on two prepared triangles: the same answer, bit for bit the same
-// work on each pair, the shared part done once. Computes the planes that it needs.
+// triangles_intersect (geometry.h) on two prepared triangles: the same answer from the same
+// rounded values, the part a triangle shares between its pairs done once (the planes it needs are
+// computed here). Defined in geometry.cpp.
 bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b);
 
 // (b1, b2, n) orthonormal for a unit n (Duff, Burgess, Christensen, Hery, Kensler, Liani,
