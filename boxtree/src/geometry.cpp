@@ -414,9 +414,9 @@ bool triangles_intersect_exact(const Vec3& a0, const Vec3& a1, const Vec3& a2, c
 
 namespace detail {
 
-// The body of both triangles_intersect: inline, so that the one on six corners runs it on
-// triangles prepared in its own registers and stack.
-inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b) {
+// The body of both triangles_intersect, inlined in both (gcc otherwise calls it from the one on
+// six corners, which then costs more than before the triangles were prepared).
+[[gnu::always_inline]] inline bool intersect_prepared(const PreparedTriangle& a, const PreparedTriangle& b) {
   // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
   // pairs of a tree walk end here.
   if ((a.hi_.array() < b.lo_.array()).any() || (b.hi_.array() < a.lo_.array()).any()) return false;
@@ -432,14 +432,8 @@ inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b) {
                                      *b.corner_[2]);
   };
   // The sides of `other`'s corners w.r.t. the plane of `t`; false when a sign is not certain.
-  const auto sides = [](PreparedTriangle& t, const PreparedTriangle& other, int(&side)[3]) {
+  const auto sides = [](const PreparedTriangle& t, const PreparedTriangle& other, int(&side)[3]) {
     const Vec3& origin = *t.corner_[0];
-    if (!t.has_plane_) {
-      const PlaneSide plane(origin, *t.corner_[1], *t.corner_[2]);
-      t.normal_ = plane.normal;
-      t.magnitude_ = plane.magnitude;
-      t.has_plane_ = true;
-    }
     // |d - a| per axis over the box of the points, times the normal's product magnitudes.
     const Vec3 reach = (other.hi_ - origin).cwiseAbs().cwiseMax((other.lo_ - origin).cwiseAbs());
     const Real bound = 1e-15 * reach.dot(t.magnitude_);
@@ -469,13 +463,13 @@ inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b) {
   return true;
 }
 
-bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b) { return intersect_prepared(a, b); }
+bool triangles_intersect(const PreparedTriangle& a, const PreparedTriangle& b) { return intersect_prepared(a, b); }
 
 }  // namespace detail
 
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                          const Vec3& b2) {
-  detail::PreparedTriangle a(a0, a1, a2), b(b0, b1, b2);
+  const detail::PreparedTriangle a(a0, a1, a2), b(b0, b1, b2);
   return detail::intersect_prepared(a, b);
 }
 

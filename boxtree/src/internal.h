@@ -8,6 +8,7 @@
 #include "boxtree/mesh.h"
 #include "boxtree/volume/aabb.h"
 #include "boxtree/volume/obb.h"
+#include "exact_sign.h"
 
 namespace boxtree::detail {
 
@@ -39,9 +40,9 @@ class ObbTriangleTest {
 };
 
 // One triangle of triangles_intersect as that test uses it, prepared once for the pairs that
-// share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box at
-// once, the rounded plane through its corners (detail::PlaneSide's normal and magnitudes) when a
-// pair first needs it. Holds pointers to the corners, which must outlive it.
+// share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box and
+// its rounded plane (exact_sign.h's rounded_normal through its first corner). Holds pointers to
+// the corners, which must outlive it.
 class PreparedTriangle {
  public:
   PreparedTriangle() = default;
@@ -52,21 +53,19 @@ class PreparedTriangle {
     corner_[2] = &p2;
     lo_ = p0.cwiseMin(p1).cwiseMin(p2);
     hi_ = p0.cwiseMax(p1).cwiseMax(p2);
-    has_plane_ = false;
+    rounded_normal(p0, p1, p2, normal_, magnitude_);
   }
 
  private:
-  friend inline bool intersect_prepared(PreparedTriangle& a, PreparedTriangle& b);  // geometry.cpp only
+  friend inline bool intersect_prepared(const PreparedTriangle& a, const PreparedTriangle& b);  // geometry.cpp only
   const Vec3* corner_[3] = {nullptr, nullptr, nullptr};
   Vec3 lo_, hi_;
-  Vec3 normal_, magnitude_;  // valid when has_plane_
-  bool has_plane_ = false;
+  Vec3 normal_, magnitude_;
 };
 
 // triangles_intersect (geometry.h) on two prepared triangles: the same answer from the same
-// rounded values, the part a triangle shares between its pairs done once (the planes it needs are
-// computed here). Defined in geometry.cpp.
-bool triangles_intersect(PreparedTriangle& a, PreparedTriangle& b);
+// rounded values, the part a triangle shares between its pairs done once. Defined in geometry.cpp.
+bool triangles_intersect(const PreparedTriangle& a, const PreparedTriangle& b);
 
 // (b1, b2, n) orthonormal for a unit n (Duff, Burgess, Christensen, Hery, Kensler, Liani,
 // Villemin, "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017): branch-free of any
