@@ -2,12 +2,18 @@
 // Tree vs tree against all-pairs brute force, under random rigid motions.
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <string>
+
 #include <Eigen/Geometry>
 
 #include "boxtree/build.h"
 #include "boxtree/collide.h"
+#include "boxtree/geometry.h"
+#include "boxtree/packed_tree.h"
 #include "boxtree/volume/aabb.h"
 #include "support/brute_force.h"
+#include "support/checks.h"
 #include "support/meshes.h"
 
 namespace boxtree {
@@ -75,6 +81,69 @@ TEST(Collide, SelfContactIsExact) {
   EXPECT_EQ(test::violations(got, expected), "");
   for (FacetId f = 0; f < mesh.facet_count(); ++f)
     EXPECT_TRUE(std::binary_search(got.begin(), got.end(), FacetPair{f, f}));
+}
+
+// The pairs for which triangles_intersect, on a's corners and on b's corners moved by a_from_b
+// (the very doubles that collide tests), says the facets meet: exactly what collide reports.
+std::vector<FacetPair> meeting_pairs(const TriangleMesh& a, const TriangleMesh& b, const RigidTransform& a_from_b) {
+  std::vector<Vec3> moved(b.vertices.size());
+  for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = a_from_b.apply(b.vertices[i]);
+  std::vector<FacetPair> out;
+  for (FacetId fa = 0; fa < a.facet_count(); ++fa) {
+    for (FacetId fb = 0; fb < b.facet_count(); ++fb) {
+      const auto& t = b.triangles[fb];
+      if (triangles_intersect(a.corner(fa, 0), a.corner(fa, 1), a.corner(fa, 2), moved[t[0]], moved[t[1]], moved[t[2]]))
+        out.push_back({fa, fb});
+    }
+  }
+  return out;
+}
+
+// The walks keep the facets they meet prepared for the leaf test (b's corners moved, bounding
+// boxes, planes: query_internal.h's FacetPairTest) and reuse them for later pairs; that must
+// change no answer. A mesh against itself moved by a few ulps or turned by ~1e-10, also 1e4 from
+// the origin: nearly every leaf pair touches or nearly so and goes to the exact stage on a reused
+// plane. A small body on a larger terrain takes the packed tree's other path (the facets gathered
+// in the body's root box, each against the body's tree).
+TEST(Collide, LeafPairsAreTrianglesIntersectOnTheMovedCorners) {
+  test::Random r(77);
+  std::size_t pairs = 0;
+  const auto check = [&](const TriangleMesh& mesh_a, const TriangleMesh& mesh_b, const RigidTransform& a_from_b,
+                         const std::string& name) {
+    const std::vector<FacetPair> expected = meeting_pairs(mesh_a, mesh_b, a_from_b);
+    const Tree<Aabb> a = build_tree<Aabb>(mesh_a);
+    const Tree<Aabb> b = build_tree<Aabb>(mesh_b);
+    EXPECT_EQ(collide(a, b, a_from_b), expected) << name << ": Tree<Aabb>";
+    EXPECT_EQ(collide(PackedAabbTree(a), PackedAabbTree(b), a_from_b), expected) << name << ": PackedAabbTree";
+    pairs += expected.size();
+  };
+  for (const Real offset : {0.0, 1e4}) {
+    TriangleMesh mesh = make_terrain(12, 12, 2, 10, 2);
+    for (Vec3& v : mesh.vertices) v += Vec3(offset, -offset, offset);
+    const std::string name = "terrain at " + std::to_string(offset);
+    check(mesh, mesh, RigidTransform::identity(), name + ", identity");
+    for (int pose = 0; pose < 6; ++pose) {
+      RigidTransform shifted = RigidTransform::identity();
+      const Real ulps = r.uniform(-8, 8);
+      shifted.translation = r.unit_vector() * (ulps * std::numeric_limits<Real>::epsilon() * (offset + 10));
+      check(mesh, mesh, shifted, name + ", shifted " + std::to_string(pose));
+      RigidTransform turned = RigidTransform::identity();
+      const Real angle = r.uniform(-1e-10, 1e-10);
+      turned.rotation = Eigen::AngleAxisd(angle, r.unit_vector()).toRotationMatrix();
+      check(mesh, mesh, turned, name + ", turned " + std::to_string(pose));
+    }
+  }
+  TriangleMesh body = make_uv_sphere(16, 8, 0.6);
+  const TriangleMesh terrain = make_terrain(24, 24, 3, 24, 2);
+  for (int pose = 0; pose < 6; ++pose) {
+    RigidTransform t;
+    t.rotation = random_rotation(r);
+    const Vec3& anchor = terrain.vertices[r.next() % terrain.vertices.size()];
+    t.translation = anchor + Vec3(0, 0, r.uniform(0, 0.5));
+    check(terrain, body, t, "body on terrain " + std::to_string(pose));
+    check(body, terrain, t.inverse(), "terrain on body " + std::to_string(pose));
+  }
+  EXPECT_GT(pairs, 1000u);
 }
 
 TEST(Collide, ConcentricSpheresNoPairs) {

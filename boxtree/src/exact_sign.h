@@ -110,18 +110,24 @@ inline int orient3d_sign(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
 // orient3d_sign(a, b, c, d) for many d against one plane: the normal and the magnitudes of its
 // products (for the error bound) are computed once.
 // Holds references to the three corners: it lives within the caller's use of them.
+// (b - a) x (c - a) as orient3d_sign rounds it, and |l| + |r| per component (the magnitudes of its
+// two products, for the error bound of a sign taken with it).
+inline void rounded_normal(const Vec3& a, const Vec3& b, const Vec3& c, Vec3& normal, Vec3& magnitude) {
+  const Vec3 u = b - a, v = c - a;
+  // Component k: l - r with l = u_i v_j, r = u_j v_i (i = k + 1, j = k + 2), as whole vectors.
+  const Vec3 l(u.y() * v.z(), u.z() * v.x(), u.x() * v.y());
+  const Vec3 r(u.z() * v.y(), u.x() * v.z(), u.y() * v.x());
+  normal = l - r;
+  magnitude = l.cwiseAbs() + r.cwiseAbs();
+}
+
 struct PlaneSide {
   const Vec3& a;
   const Vec3& b;
   const Vec3& c;
-  Vec3 normal, magnitude;  // (b - a) x (c - a) as orient3d_sign rounds it; |l| + |r| per component
+  Vec3 normal, magnitude;  // rounded_normal(a, b, c)
   PlaneSide(const Vec3& a_, const Vec3& b_, const Vec3& c_) : a(a_), b(b_), c(c_) {
-    const Vec3 u = b - a, v = c - a;
-    // Component k: l - r with l = u_i v_j, r = u_j v_i (i = k + 1, j = k + 2), as whole vectors.
-    const Vec3 l(u.y() * v.z(), u.z() * v.x(), u.x() * v.y());
-    const Vec3 r(u.z() * v.y(), u.x() * v.z(), u.y() * v.x());
-    normal = l - r;
-    magnitude = l.cwiseAbs() + r.cwiseAbs();
+    rounded_normal(a, b, c, normal, magnitude);
   }
   // An axis along which the triangle abc is certainly seen with non-zero area (a component of
   // the normal beyond its rounding bound, as orient2d_sign decides it), or -1 when none is certain:

@@ -412,13 +412,14 @@ bool triangles_intersect_exact(const Vec3& a0, const Vec3& a1, const Vec3& a2, c
 
 }  // namespace
 
-bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                         const Vec3& b2) {
+namespace detail {
+
+// The body of both triangles_intersect, inlined in both (gcc otherwise calls it from the one on
+// six corners, which then costs more than before the triangles were prepared).
+[[gnu::always_inline]] inline bool intersect_prepared(const PreparedTriangle& a, const PreparedTriangle& b) {
   // Disjoint bounding boxes (compared exactly) mean disjoint triangles: cheap, and most candidate
   // pairs of a tree walk end here.
-  const Vec3 a_lo = a0.cwiseMin(a1).cwiseMin(a2), a_hi = a0.cwiseMax(a1).cwiseMax(a2);
-  const Vec3 b_lo = b0.cwiseMin(b1).cwiseMin(b2), b_hi = b0.cwiseMax(b1).cwiseMax(b2);
-  if ((a_hi.array() < b_lo.array()).any() || (b_hi.array() < a_lo.array()).any()) return false;
+  if ((a.hi_.array() < b.lo_.array()).any() || (b.hi_.array() < a.lo_.array()).any()) return false;
   // Guigue & Devillers (below) on rounded signs, each of which is used only where it is farther
   // from zero than a bound on its rounding error (exact_sign.h's first-stage bound, taken once per
   // plane over the other triangle's bounding box): then every sign is the exact one, none is zero
@@ -426,15 +427,18 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   // Any sign within its bound hands the pair to triangles_intersect_exact.
   // A degenerate triangle's rounded normal is within its bound, so its plane decides no side:
   // such pairs go to the exact test without a check of their own.
-  const Vec3* const a[3] = {&a0, &a1, &a2};
-  const Vec3* const b[3] = {&b0, &b1, &b2};
-  const auto sides = [](const detail::PlaneSide& plane, const Vec3& lo, const Vec3& hi, const Vec3* const(&points)[3],
-                        int(&side)[3]) {
+  const auto exact = [&] {
+    return triangles_intersect_exact(*a.corner_[0], *a.corner_[1], *a.corner_[2], *b.corner_[0], *b.corner_[1],
+                                     *b.corner_[2]);
+  };
+  // The sides of `other`'s corners w.r.t. the plane of `t`; false when a sign is not certain.
+  const auto sides = [](const PreparedTriangle& t, const PreparedTriangle& other, int(&side)[3]) {
+    const Vec3& origin = *t.corner_[0];
     // |d - a| per axis over the box of the points, times the normal's product magnitudes.
-    const Vec3 reach = (hi - plane.a).cwiseAbs().cwiseMax((lo - plane.a).cwiseAbs());
-    const Real bound = 1e-15 * reach.dot(plane.magnitude);
+    const Vec3 reach = (other.hi_ - origin).cwiseAbs().cwiseMax((other.lo_ - origin).cwiseAbs());
+    const Real bound = 1e-15 * reach.dot(t.magnitude_);
     for (int i = 0; i < 3; ++i) {
-      const Real det = plane.normal.dot(*points[i] - plane.a);
+      const Real det = t.normal_.dot(*other.corner_[i] - origin);
       if (!(std::abs(det) > bound)) return false;
       side[i] = det > 0 ? 1 : -1;
     }
@@ -442,23 +446,31 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   };
   int side_b[3];  // orient3d(a0, a1, a2, b_i)
   int side_a[3];  // orient3d(b0, b1, b2, a_i)
-  const detail::PlaneSide plane_a(a0, a1, a2);
-  if (!sides(plane_a, b_lo, b_hi, b, side_b)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (!sides(a, b, side_b)) return exact();
   if (side_b[0] == side_b[1] && side_b[1] == side_b[2]) return false;
-  const detail::PlaneSide plane_b(b0, b1, b2);
-  if (!sides(plane_b, a_lo, a_hi, a, side_a)) return triangles_intersect_exact(a0, a1, a2, b0, b1, b2);
+  if (!sides(b, a, side_a)) return exact();
   if (side_a[0] == side_a[1] && side_a[1] == side_a[2]) return false;
   // Each triangle straddles the other's plane: the pivot is the corner alone on its side.
   const auto pivot = [](const int(&side)[3]) { return side[0] == side[1] ? 2 : (side[0] == side[2] ? 1 : 0); };
   const int ia = pivot(side_a), ib = pivot(side_b);
-  const Vec3* p[3] = {a[ia], a[(ia + 1) % 3], a[(ia + 2) % 3]};
-  const Vec3* q[3] = {b[ib], b[(ib + 1) % 3], b[(ib + 2) % 3]};
+  const Vec3* p[3] = {a.corner_[ia], a.corner_[(ia + 1) % 3], a.corner_[(ia + 2) % 3]};
+  const Vec3* q[3] = {b.corner_[ib], b.corner_[(ib + 1) % 3], b.corner_[(ib + 2) % 3]};
   if (side_a[ia] < 0) std::swap(q[1], q[2]);
   if (side_b[ib] < 0) std::swap(p[1], p[2]);
-  if (detail::orient3d_sign(*p[0], *p[1], *q[0], *q[1]) > 0) return false;
-  if (detail::orient3d_sign(*p[0], *p[2], *q[2], *q[0]) > 0) return false;
+  if (orient3d_sign(*p[0], *p[1], *q[0], *q[1]) > 0) return false;
+  if (orient3d_sign(*p[0], *p[2], *q[2], *q[0]) > 0) return false;
   // A zero here is a touching end of the two intervals: decided exactly, as a meeting.
   return true;
+}
+
+bool triangles_intersect(const PreparedTriangle& a, const PreparedTriangle& b) { return intersect_prepared(a, b); }
+
+}  // namespace detail
+
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
+  const detail::PreparedTriangle a(a0, a1, a2), b(b0, b1, b2);
+  return detail::intersect_prepared(a, b);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -8,6 +8,7 @@
 #include "boxtree/mesh.h"
 #include "boxtree/volume/aabb.h"
 #include "boxtree/volume/obb.h"
+#include "exact_sign.h"
 
 namespace boxtree::detail {
 
@@ -37,6 +38,34 @@ class ObbTriangleTest {
   Aabb local_;
   bool valid_;
 };
+
+// One triangle of triangles_intersect as that test uses it, prepared once for the pairs that
+// share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box and
+// its rounded plane (exact_sign.h's rounded_normal through its first corner). Holds pointers to
+// the corners, which must outlive it.
+class PreparedTriangle {
+ public:
+  PreparedTriangle() = default;
+  PreparedTriangle(const Vec3& p0, const Vec3& p1, const Vec3& p2) { reset(p0, p1, p2); }
+  void reset(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+    corner_[0] = &p0;
+    corner_[1] = &p1;
+    corner_[2] = &p2;
+    lo_ = p0.cwiseMin(p1).cwiseMin(p2);
+    hi_ = p0.cwiseMax(p1).cwiseMax(p2);
+    rounded_normal(p0, p1, p2, normal_, magnitude_);
+  }
+
+ private:
+  friend inline bool intersect_prepared(const PreparedTriangle& a, const PreparedTriangle& b);  // geometry.cpp only
+  const Vec3* corner_[3] = {nullptr, nullptr, nullptr};
+  Vec3 lo_, hi_;
+  Vec3 normal_, magnitude_;
+};
+
+// triangles_intersect (geometry.h) on two prepared triangles: the same answer from the same
+// rounded values, the part a triangle shares between its pairs done once. Defined in geometry.cpp.
+bool triangles_intersect(const PreparedTriangle& a, const PreparedTriangle& b);
 
 // (b1, b2, n) orthonormal for a unit n (Duff, Burgess, Christensen, Hery, Kensler, Liani,
 // Villemin, "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017): branch-free of any

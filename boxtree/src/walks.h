@@ -184,8 +184,7 @@ void collide_views(const View& a, const View& b, const RigidTransform& a_from_b,
     throw Error("collide: the transform's rotation is not orthonormal with determinant +1, or not finite");
   QueryStats local;
   if (a.empty() || b.empty()) return;
-  const TriangleMesh& mesh_a = a.mesh();
-  const TriangleMesh& mesh_b = b.mesh();
+  detail::FacetPairTest facets_intersect(a.mesh(), b.mesh(), a_from_b);
 
   using Node = typename View::Node;
   struct NodePair {
@@ -207,7 +206,7 @@ void collide_views(const View& a, const View& b, const RigidTransform& a_from_b,
       const FacetId fa = a.facet(pair.a);
       const FacetId fb = b.facet(pair.b);
       ++local.leaf_tests;
-      if (detail::facets_intersect(mesh_a, fa, mesh_b, fb, a_from_b)) {
+      if (facets_intersect(fa, fb)) {
         if (!visit(FacetPair{fa, fb}) || settings.stop_at_first) stop = true;
       }
       continue;
