@@ -479,13 +479,18 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
   // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u),
   // so the overlap is the corners' reach along u beyond mid plus the cylinder's half extent along u.
   const Vec3 corner[3] = {tri.v[0] - mid, tri.v[1] - mid, tri.v[2] - mid};
-  const auto overlap_along = [&](const Vec3& u) {
+  // The overlaps along u and along -u, whose products are those along u negated (exactly), so
+  // that the cylinder's part is shared and the corners' reach along -u is minus their least one.
+  const auto overlaps_along = [&](const Vec3& u, Real& value, Real& opposite) {
     const Real along = u.dot(w);
-    const Real top = std::max({u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])});
+    const Real reach[3] = {u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])};
     // |u - (u.w) w|, from 1 - (u.w)^2 unless that cancels (u near +-w, the disks' normals).
     const Real across = 1 - along * along;
     const Real side = across > 1e-4 ? std::sqrt(across) : Vec3(u - along * w).norm();
-    return top + half * std::abs(along) + radius * side;
+    const Real extent = half * std::abs(along);
+    const Real rim = radius * side;
+    value = std::max({reach[0], reach[1], reach[2]}) + extent + rim;
+    opposite = -std::min({reach[0], reach[1], reach[2]}) + extent + rim;
   };
 
   const Real noise = 64 * kEps * (std::max(tri.coord, coord_) + size);
@@ -493,11 +498,7 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
   Real behind_best = kInf;  // one-sided: the least overlap along the normals behind the triangle
   Vec3 best_normal = tri.normal;
   bool apart = false;
-  const auto consider = [&](const Vec3& direction) {
-    const Real len = direction.norm();
-    if (!(len > 0)) return;
-    const Vec3 u = direction / len;
-    const Real value = overlap_along(u);
+  const auto take = [&](const Vec3& u, Real value) {
     if (value < limit) apart = true;
     if (one_sided && u.dot(tri.normal) < -kBehind) {  // separates, but is not a normal here
       behind_best = std::min(behind_best, value);
@@ -508,16 +509,38 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
       best_normal = u;
     }
   };
+  const auto consider = [&](const Vec3& direction) {
+    const Real len = direction.norm();
+    if (!(len > 0)) return;
+    const Vec3 u = direction / len;
+    Real value = 0;
+    Real opposite = 0;
+    overlaps_along(u, value, opposite);
+    take(u, value);
+  };
+  // consider(direction) and then consider(-direction).
+  const auto consider_both = [&](const Vec3& direction) {
+    const Real len = direction.norm();
+    if (!(len > 0)) return;
+    const Vec3 u = direction / len;
+    Real value = 0;
+    Real opposite = 0;
+    overlaps_along(u, value, opposite);
+    take(u, value);
+    take(-u, opposite);
+  };
   // The flat faces of the Minkowski difference and the curved ones around a corner: the face
   // under a point of the cylinder (n), a disk over a corner (w), the side along an edge (w x e),
   // the side over a corner (the radial direction from the corner to the axis). Where the two are
   // apart, the corners against the rims too (a ridge: its normals are the directions from a corner
   // to its nearest rim point). The in-plane edge normals are kinks of the overlap on the circle
   // that bounds a one-sided triangle's normals.
-  consider(tri.normal);
-  if (!one_sided) consider(-tri.normal);
-  consider(w);
-  consider(-w);
+  if (one_sided) {
+    consider(tri.normal);
+  } else {
+    consider_both(tri.normal);
+  }
+  consider_both(w);
   consider(mid - closest_point_on_triangle(mid, a, b, c));
   if (apart) return 0;  // most candidates of the query box are apart along one of these already
   Vec3 edge_normal[3];
@@ -525,10 +548,7 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
     const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
     edge_normal[j] = e.cross(tri.normal).normalized();
     const Vec3 u = w.cross(e);
-    if (u.norm() > 1e-6 * e.norm()) {
-      consider(u);
-      consider(-u);
-    }
+    if (u.norm() > 1e-6 * e.norm()) consider_both(u);
     const Vec3 d = mid - tri.v[j];
     consider(d - d.dot(w) * w);
     if (!one_sided) consider(edge_normal[j]);
@@ -620,8 +640,7 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
   // u . w changes sign; the kinks themselves, the m_j and +-n x w, are candidates).
   if (one_sided && behind_best < best - noise) {
     const Vec3 across = tri.normal.cross(w);
-    consider(across);
-    consider(-across);
+    consider_both(across);
     for (const Vec3& m : edge_normal) consider(m);
     for (int k = 0; k < 3; ++k) {
       const Vec3& a1 = edge_normal[(k + 2) % 3];
