@@ -616,18 +616,20 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
   const auto quarter_bound = [](Real along_n, Real along_m) {
     return along_n < 0 && along_m < 0 ? -std::hypot(along_n, along_m) : std::min(along_n, along_m);
   };
+  // A quarter's bound from the lowest (highest) point first, the middle's support only if that
+  // bound does not already drop the quarter: the larger of the two either way.
+  const auto bound_of = [&](const Vec3& v, const Vec3& m, int quarter) {
+    const bool front = quarter == 0;
+    const Vec3 end = v - (front ? lowest : highest);
+    const Real bound = quarter_bound(front ? end.dot(tri.normal) : -end.dot(tri.normal), end.dot(m));
+    if (!(bound < best - noise)) return bound;
+    const Vec3 middle = v - axis_(front ? Vec3(-(tri.normal + m)) : Vec3(tri.normal - m));
+    return std::max(bound, quarter_bound(front ? middle.dot(tri.normal) : -middle.dot(tri.normal), middle.dot(m)));
+  };
   for (int j = 0; j < 3 && !apart; ++j) {
     const Vec3& m = edge_normal[j];
-    const Vec3 down = tri.v[j] - lowest;
-    const Vec3 up = tri.v[j] - highest;
-    const Vec3 down_middle = tri.v[j] - axis_(-(tri.normal + m));
-    const Vec3 up_middle = tri.v[j] - axis_(tri.normal - m);
-    const Real bounds[2] = {std::max(quarter_bound(down.dot(tri.normal), down.dot(m)),
-                                     quarter_bound(down_middle.dot(tri.normal), down_middle.dot(m))),
-                            std::max(quarter_bound(-up.dot(tri.normal), up.dot(m)),
-                                     quarter_bound(-up_middle.dot(tri.normal), up_middle.dot(m)))};
     for (int quarter = 0; quarter < 2; ++quarter) {
-      if (bounds[quarter] >= best - noise) continue;
+      if (bound_of(tri.v[j], m, quarter) >= best - noise) continue;
       split_at_kink(tri.normal, m, quarter_ends[quarter], quarter_ends[quarter + 1], tri.v[j]);
     }
   }
