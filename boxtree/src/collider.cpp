@@ -6,6 +6,7 @@
 
 #include "boxtree/active_edges.h"
 #include "boxtree/geometry.h"
+#include "contact_cylinder.h"
 #include "contact_polytope.h"
 #include "internal.h"
 
@@ -197,11 +198,10 @@ void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const C
   }
   const ContactOptions options = options_for(mesh, request, result);
   const Obb query = segment_box(cylinder.p0, cylinder.p1, cylinder.radius + request.margin, request.margin);
-  run_pipeline<kMaxCylinderTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result,
-      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
-        return contact_cylinder_triangle(cylinder.p0, cylinder.p1, cylinder.radius, a, b, c, o, out);
-      });
+  // contact_cylinder_triangle, the cylinder's axis and support set up once
+  const detail::CylinderTriangleContacts contacts(cylinder.p0, cylinder.p1, cylinder.radius);
+  run_pipeline<kMaxCylinderTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
+                                             contacts);
   reduce(request, result);
 }
 

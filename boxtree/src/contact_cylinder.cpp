@@ -8,21 +8,26 @@
 
 #include "boxtree/contact.h"
 #include "boxtree/geometry.h"
+#include "contact_cylinder.h"
 #include "contact_internal.h"
 
 namespace boxtree {
 
 using namespace detail;  // the narrowphase's helpers (contact_internal.h)
 
-Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& direction) {
+detail::CylinderSupport::CylinderSupport(const Vec3& end0, const Vec3& end1, Real cylinder_radius)
+    : p0(end0), p1(end1), radius(cylinder_radius) {
   const Vec3 axis = p1 - p0;
-  const Real length = axis.norm();
+  length = axis.norm();
+  if (length > 0) u = axis / length;
+}
+
+Vec3 detail::CylinderSupport::operator()(const Vec3& direction) const {
   if (!(length > 0)) {
     // No axis to orient the disks by: the sphere of that radius (a conservative stand-in).
     const Real len = direction.norm();
     return len > 0 ? Vec3(p0 + (radius / len) * direction) : p0;
   }
-  const Vec3 u = axis / length;
   const Real along = direction.dot(u);
   const Vec3 end = along >= 0 ? p1 : p0;
   const Vec3 radial = direction - along * u;
@@ -31,6 +36,10 @@ Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& d
   // rim point (up to `radius` off along the direction): the disk's centre is exact there.
   if (!(radial_length > 1e-12 * direction.norm())) return end;
   return end + (radius / radial_length) * radial;
+}
+
+Vec3 support_cylinder(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& direction) {
+  return detail::CylinderSupport(p0, p1, radius)(direction);
 }
 
 namespace {
@@ -51,8 +60,9 @@ struct PrismDepths {
   Real shallowest = kInf;
 };
 
-PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length, Real radius, const TriangleFrame& tri,
-                                     Real slack) {
+// `support`: support_cylinder(p0, p0 + length w, radius, .).
+PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length, Real radius,
+                                     const CylinderSupport& support, const TriangleFrame& tri, Real slack) {
   const Vec3& n = tri.normal;
   const Real plane = n.dot(tri.v[0]);
   Vec3 walls[3];
@@ -77,7 +87,7 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
     }
     result.shallowest = std::min(result.shallowest, depth);
   };
-  const Vec3 p1 = p0 + length * w;
+  const Vec3& p1 = support.p1;
   const auto radial = [&](const Vec3& v) { return Vec3(v - w.dot(v) * w); };  // P v, P = I - w w^T
   const Vec3 pn = radial(n);
   Vec3 u1;  // the rims' plane
@@ -85,7 +95,7 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
   detail::orthonormal_completion(w, u1, u2);
   // No wall active.
   for (const Real sign : {Real(-1), Real(1)}) {
-    const Vec3 x = support_cylinder(p0, p1, radius, sign * n);
+    const Vec3 x = support(sign * n);
     if (in_prism(x, -1, -1)) take(x);
   }
   for (int i = 0; i < 3; ++i) {
@@ -179,11 +189,11 @@ PrismDepths cylinder_depths_in_prism(const Vec3& p0, const Vec3& w, Real length,
 // it >= d0 (n the least over the sphere); one-sided ones need only that the two really meet
 // (d0 > 0 and the foot t inside the cylinder, or that bound >= 0), since normals behind the
 // triangle are never answers there.
-int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radius, const TriangleFrame& tri,
-                          bool one_sided, Real limit) {
+// `support`: support_cylinder(p0, p0 + length w, radius, .).
+int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radius, const CylinderSupport& support,
+                          const TriangleFrame& tri, bool one_sided, Real limit) {
   const Vec3& n = tri.normal;
-  const Vec3 p1 = p0 + length * w;
-  const Vec3 low = support_cylinder(p0, p1, radius, -n);
+  const Vec3 low = support(-n);
   const Real d0 = n.dot(tri.v[0] - low);
   if (d0 < limit) return -1;
   const auto clearance = [&](const Vec3& foot) {
@@ -202,7 +212,7 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   } else if (one_sided) {
     return 1;
   }
-  const Vec3 high = support_cylinder(p0, p1, radius, n);
+  const Vec3 high = support(n);
   const Real height = n.dot(high - tri.v[0]);
   const Real back = std::min(height, clearance(high - height * n));
   return back >= (one_sided ? Real(0) : d0) ? 1 : 0;
@@ -349,8 +359,21 @@ void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real
 
 }  // namespace
 
+detail::CylinderTriangleContacts::CylinderTriangleContacts(const Vec3& p0, const Vec3& p1, Real radius)
+    : valid_(finite(p0, p1, Vec3::Constant(radius)) && radius >= 0),
+      axis_(p0, p1, radius),
+      mid_((p0 + p1) / 2),
+      coord_(std::max(max_abs(p0), max_abs(p1))) {
+  if (axis_.length > 0) rebuilt_ = CylinderSupport(p0, p0 + axis_.length * axis_.u, radius);
+}
+
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
                               const ContactOptions& options, ContactPoint* out) {
+  return detail::CylinderTriangleContacts(p0, p1, radius)(a, b, c, options, out);
+}
+
+int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, const Vec3& c,
+                                                 const ContactOptions& options, ContactPoint* out) const {
   // The least overlap of the projections over unit normals (contact_convex_triangle's answer),
   // found without GJK/EPA as the least over the critical normals of the overlap f(u), one family
   // per kind of face of the Minkowski difference of the two shapes: the triangle's face against a
@@ -362,31 +385,33 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   // whose normals are candidates too. f is exact along any normal, so every candidate is an upper
   // bound and any with a gap wider than the margin proves the two apart. Shapes behind a
   // one-sided triangle (the push-out case) and degenerate inputs go to the general routine.
-  if (!finite(a, b, c) || !finite(p0, p1, Vec3::Constant(radius)) || !(radius >= 0)) return 0;
+  if (!finite(a, b, c) || !valid_) return 0;
   const TriangleFrame tri(a, b, c);
-  const Vec3 axis = p1 - p0;
-  const Real length = axis.norm();
-  const Vec3 mid = (p0 + p1) / 2;
+  const Vec3& p0 = axis_.p0;
+  const Vec3& p1 = axis_.p1;
+  const Real radius = axis_.radius;
+  const Real length = axis_.length;
+  const Vec3& mid = mid_;
   const auto general = [&] {
-    const auto support = [&](const Vec3& d) { return support_cylinder(p0, p1, radius, d); };
+    const auto support = [&](const Vec3& d) { return axis_(d); };
     const int n = contact_convex_triangle({support, mid}, a, b, c, options, out);
     return n;
   };
   const Real size = std::max({tri.size, length, 2 * radius, std::max(options.margin, Real(0))});
   if (tri.degenerate || !(length > kTiny * size)) return general();
   const bool one_sided = tri.one_sided(options);
-  const Vec3 w = axis / length;
+  const Vec3& w = axis_.u;
   const Real half = length / 2;
   const Real margin = std::max(options.margin, Real(0));
-  const Real limit = -margin - tolerance(size, std::max({tri.coord, max_abs(p0), max_abs(p1)}));
+  const Real limit = -margin - tolerance(size, std::max(tri.coord, coord_));
   Real pushed_depth = 0;
   Vec3 pushed_point = Vec3::Zero();
   if (one_sided && tri.signed_distance(mid) < 0) {
     // Behind a one-sided triangle: pushed out through the front by the least lift that clears the
     // triangle, the depth of the cylinder's deepest point over it; seen only if it really meets
     // the triangle (points over it on both sides of the plane).
-    const PrismDepths depths =
-        cylinder_depths_in_prism(p0, w, length, radius, tri, tolerance(size, std::max(tri.coord, max_abs(mid))));
+    const PrismDepths depths = cylinder_depths_in_prism(p0, w, length, radius, rebuilt_, tri,
+                                                        tolerance(size, std::max(tri.coord, max_abs(mid))));
     if (!depths.any || !(depths.deepest > 0) || depths.shallowest > 0) return 0;
     pushed_depth = depths.deepest;
     pushed_point = depths.deepest_point;
@@ -442,9 +467,9 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     return finish(tri.normal, pushed_depth,
                   make_contact(pushed_point + pushed_depth * tri.normal, tri.normal, pushed_depth));
   }
-  if (const int proven = flat_contact_is_least(p0, w, length, radius, tri, one_sided, limit)) {
+  if (const int proven = flat_contact_is_least(p0, w, length, radius, rebuilt_, tri, one_sided, limit)) {
     if (proven < 0) return 0;
-    const Vec3 low = support_cylinder(p0, p1, radius, -tri.normal);
+    const Vec3 low = axis_(-tri.normal);
     const Real depth = tri.normal.dot(tri.v[0] - low);
     if (!(depth >= -margin)) return 0;
     return finish(tri.normal, depth,
@@ -454,25 +479,26 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   // The cylinder's lowest point along unit u is mid - half*sign(u.w)*w - radius*(radial part of u),
   // so the overlap is the corners' reach along u beyond mid plus the cylinder's half extent along u.
   const Vec3 corner[3] = {tri.v[0] - mid, tri.v[1] - mid, tri.v[2] - mid};
-  const auto overlap_along = [&](const Vec3& u) {
+  // The overlaps along u and along -u, whose products are those along u negated (exactly), so
+  // that the cylinder's part is shared and the corners' reach along -u is minus their least one.
+  const auto overlaps_along = [&](const Vec3& u, Real& value, Real& opposite) {
     const Real along = u.dot(w);
-    const Real top = std::max({u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])});
+    const Real reach[3] = {u.dot(corner[0]), u.dot(corner[1]), u.dot(corner[2])};
     // |u - (u.w) w|, from 1 - (u.w)^2 unless that cancels (u near +-w, the disks' normals).
     const Real across = 1 - along * along;
     const Real side = across > 1e-4 ? std::sqrt(across) : Vec3(u - along * w).norm();
-    return top + half * std::abs(along) + radius * side;
+    const Real extent = half * std::abs(along);
+    const Real rim = radius * side;
+    value = std::max({reach[0], reach[1], reach[2]}) + extent + rim;
+    opposite = -std::min({reach[0], reach[1], reach[2]}) + extent + rim;
   };
 
-  const Real noise = 64 * kEps * (std::max({tri.coord, max_abs(p0), max_abs(p1)}) + size);
+  const Real noise = 64 * kEps * (std::max(tri.coord, coord_) + size);
   Real best = kInf;
   Real behind_best = kInf;  // one-sided: the least overlap along the normals behind the triangle
   Vec3 best_normal = tri.normal;
   bool apart = false;
-  const auto consider = [&](const Vec3& direction) {
-    const Real len = direction.norm();
-    if (!(len > 0)) return;
-    const Vec3 u = direction / len;
-    const Real value = overlap_along(u);
+  const auto take = [&](const Vec3& u, Real value) {
     if (value < limit) apart = true;
     if (one_sided && u.dot(tri.normal) < -kBehind) {  // separates, but is not a normal here
       behind_best = std::min(behind_best, value);
@@ -483,16 +509,38 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
       best_normal = u;
     }
   };
+  const auto consider = [&](const Vec3& direction) {
+    const Real len = direction.norm();
+    if (!(len > 0)) return;
+    const Vec3 u = direction / len;
+    Real value = 0;
+    Real opposite = 0;
+    overlaps_along(u, value, opposite);
+    take(u, value);
+  };
+  // consider(direction) and then consider(-direction).
+  const auto consider_both = [&](const Vec3& direction) {
+    const Real len = direction.norm();
+    if (!(len > 0)) return;
+    const Vec3 u = direction / len;
+    Real value = 0;
+    Real opposite = 0;
+    overlaps_along(u, value, opposite);
+    take(u, value);
+    take(-u, opposite);
+  };
   // The flat faces of the Minkowski difference and the curved ones around a corner: the face
   // under a point of the cylinder (n), a disk over a corner (w), the side along an edge (w x e),
   // the side over a corner (the radial direction from the corner to the axis). Where the two are
   // apart, the corners against the rims too (a ridge: its normals are the directions from a corner
   // to its nearest rim point). The in-plane edge normals are kinks of the overlap on the circle
   // that bounds a one-sided triangle's normals.
-  consider(tri.normal);
-  if (!one_sided) consider(-tri.normal);
-  consider(w);
-  consider(-w);
+  if (one_sided) {
+    consider(tri.normal);
+  } else {
+    consider_both(tri.normal);
+  }
+  consider_both(w);
   consider(mid - closest_point_on_triangle(mid, a, b, c));
   if (apart) return 0;  // most candidates of the query box are apart along one of these already
   Vec3 edge_normal[3];
@@ -500,10 +548,7 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     const Vec3 e = tri.v[(j + 1) % 3] - tri.v[j];
     edge_normal[j] = e.cross(tri.normal).normalized();
     const Vec3 u = w.cross(e);
-    if (u.norm() > 1e-6 * e.norm()) {
-      consider(u);
-      consider(-u);
-    }
+    if (u.norm() > 1e-6 * e.norm()) consider_both(u);
     const Vec3 d = mid - tri.v[j];
     consider(d - d.dot(w) * w);
     if (!one_sided) consider(edge_normal[j]);
@@ -566,23 +611,25 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   // quarter is least at an end (unless both of its ends' values are negative). Taken with the
   // cylinder's lowest point along n and its support along the front quarter's middle, and with
   // its highest point and the support along the middle of the quarter behind.
-  const Vec3 lowest = support_cylinder(p0, p1, radius, -tri.normal);
-  const Vec3 highest = support_cylinder(p0, p1, radius, tri.normal);
+  const Vec3 lowest = axis_(-tri.normal);
+  const Vec3 highest = axis_(tri.normal);
   const auto quarter_bound = [](Real along_n, Real along_m) {
     return along_n < 0 && along_m < 0 ? -std::hypot(along_n, along_m) : std::min(along_n, along_m);
   };
+  // A quarter's bound from the lowest (highest) point first, the middle's support only if that
+  // bound does not already drop the quarter: the larger of the two either way.
+  const auto bound_of = [&](const Vec3& v, const Vec3& m, int quarter) {
+    const bool front = quarter == 0;
+    const Vec3 end = v - (front ? lowest : highest);
+    const Real bound = quarter_bound(front ? end.dot(tri.normal) : -end.dot(tri.normal), end.dot(m));
+    if (!(bound < best - noise)) return bound;
+    const Vec3 middle = v - axis_(front ? Vec3(-(tri.normal + m)) : Vec3(tri.normal - m));
+    return std::max(bound, quarter_bound(front ? middle.dot(tri.normal) : -middle.dot(tri.normal), middle.dot(m)));
+  };
   for (int j = 0; j < 3 && !apart; ++j) {
     const Vec3& m = edge_normal[j];
-    const Vec3 down = tri.v[j] - lowest;
-    const Vec3 up = tri.v[j] - highest;
-    const Vec3 down_middle = tri.v[j] - support_cylinder(p0, p1, radius, -(tri.normal + m));
-    const Vec3 up_middle = tri.v[j] - support_cylinder(p0, p1, radius, tri.normal - m);
-    const Real bounds[2] = {std::max(quarter_bound(down.dot(tri.normal), down.dot(m)),
-                                     quarter_bound(down_middle.dot(tri.normal), down_middle.dot(m))),
-                            std::max(quarter_bound(-up.dot(tri.normal), up.dot(m)),
-                                     quarter_bound(-up_middle.dot(tri.normal), up_middle.dot(m)))};
     for (int quarter = 0; quarter < 2; ++quarter) {
-      if (bounds[quarter] >= best - noise) continue;
+      if (bound_of(tri.v[j], m, quarter) >= best - noise) continue;
       split_at_kink(tri.normal, m, quarter_ends[quarter], quarter_ends[quarter + 1], tri.v[j]);
     }
   }
@@ -595,8 +642,7 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
   // u . w changes sign; the kinks themselves, the m_j and +-n x w, are candidates).
   if (one_sided && behind_best < best - noise) {
     const Vec3 across = tri.normal.cross(w);
-    consider(across);
-    consider(-across);
+    consider_both(across);
     for (const Vec3& m : edge_normal) consider(m);
     for (int k = 0; k < 3; ++k) {
       const Vec3& a1 = edge_normal[(k + 2) % 3];
@@ -606,11 +652,9 @@ int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const
     }
   }
   if (!(best >= -margin)) return 0;
-  return finish(
-      best_normal, best,
-      make_contact(
-          landing_position(tri, best_normal, support_cylinder(p0, p1, radius, -best_normal) + best * best_normal, size),
-          best_normal, best));
+  return finish(best_normal, best,
+                make_contact(landing_position(tri, best_normal, axis_(-best_normal) + best * best_normal, size),
+                             best_normal, best));
 }
 
 }  // namespace boxtree

@@ -7,7 +7,7 @@
 //  contact_polytope.h/.cpp     the convex-polytope description of boxes, hulls and triangles
 //  contact_sat.cpp             boxes, convex polyhedra and triangle pairs: separating axes
 //  contact_convex.cpp          general convex shapes: GJK + EPA (libccd), then a polished normal
-//  contact_cylinder.cpp        cylinders: the overlap along known normals, searched where curved
+//  contact_cylinder.h/.cpp     cylinders: the overlap along known normals, searched where curved
 //  contact_faces.cpp           mesh vs mesh along face normals only
 //  contact_reduction.cpp       reduce_contacts
 //
