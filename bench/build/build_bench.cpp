@@ -230,6 +230,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"merged-volume", "bounding-box"}));
   app.add_option("--repeats", min_repeats, "build every mesh at least this many times and keep the fastest build");
   CLI11_PARSE(app, argc, argv);
+  // An empty item reads as 0 and "-5" as 2^64 - 5: both refused, as is any terrain past 2^31 facets.
+  constexpr std::size_t kMostFacets = std::size_t(1) << 31;
+  if (std::any_of(sizes.begin(), sizes.end(), [](std::size_t n) { return n == 0 || n > kMostFacets; })) {
+    std::fprintf(stderr, "build_bench: --sizes: every facet count must be from 1 to %zu\n", kMostFacets);
+    return 2;
+  }
   if (sizes.empty())
     sizes = quick ? std::vector<std::size_t>{10000, 100000} : std::vector<std::size_t>{10000, 100000, 1000000, 4000000};
   if (quick && app.count("--methods") == 0) methods = {"aabb", "obb-all"};
