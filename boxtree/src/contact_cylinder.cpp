@@ -509,7 +509,9 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
       best_normal = u;
     }
   };
-  const auto consider = [&](const Vec3& direction) {
+  // Along the unit vector of `direction` (nothing for a zero one), and along its reverse too when
+  // `both` (from the same products: overlaps_along gives both).
+  const auto consider_along = [&](const Vec3& direction, bool both) {
     const Real len = direction.norm();
     if (!(len > 0)) return;
     const Vec3 u = direction / len;
@@ -517,18 +519,11 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
     Real opposite = 0;
     overlaps_along(u, value, opposite);
     take(u, value);
+    if (both) take(-u, opposite);
   };
+  const auto consider = [&](const Vec3& direction) { consider_along(direction, false); };
   // consider(direction) and then consider(-direction).
-  const auto consider_both = [&](const Vec3& direction) {
-    const Real len = direction.norm();
-    if (!(len > 0)) return;
-    const Vec3 u = direction / len;
-    Real value = 0;
-    Real opposite = 0;
-    overlaps_along(u, value, opposite);
-    take(u, value);
-    take(-u, opposite);
-  };
+  const auto consider_both = [&](const Vec3& direction) { consider_along(direction, true); };
   // The flat faces of the Minkowski difference and the curved ones around a corner: the face
   // under a point of the cylinder (n), a disk over a corner (w), the side along an edge (w x e),
   // the side over a corner (the radial direction from the corner to the axis). Where the two are
