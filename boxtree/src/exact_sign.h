@@ -74,6 +74,10 @@ inline int orient2d_sign(const Vec3& a, const Vec3& b, const Vec3& c, int drop) 
   const Real det = l - r, bound = 1e-15 * (std::abs(l) + std::abs(r));
   if (det > bound) return 1;
   if (det < -bound) return -1;
+  // Both products exactly zero (a difference of doubles is zero only for equal doubles): a
+  // triangle of an axis-aligned plane seen along another axis, e.g. every facet of a flat
+  // terrain seen along x or y, which would otherwise take the expansion below every time.
+  if ((b[i] == a[i] || c[j] == a[j]) && (b[j] == a[j] || c[i] == a[i])) return 0;
   Expansion<16> e;  // 2 products of 2 x 2 terms, 8 terms each
   add_product(e, exact_difference(b[i], a[i]), exact_difference(c[j], a[j]));
   add_product(e, exact_difference(b[j], a[j]), exact_difference(c[i], a[i]), -1);
