@@ -27,6 +27,10 @@ struct SimOptions {
   // Mesh vs mesh with temporal coherence in the boxtree adapters (Bullet's
   // AlgorithmSettings::meshCoherence, ODE's GeomSettings::mesh_coherence; both off by default).
   bool mesh_coherence = false;
+  // Bullet with the boxtree adapter: convex hulls get their polyhedral features
+  // (btPolyhedralConvexShape::initializePolyhedralFeatures) and boxtree's exact separating axes
+  // (AlgorithmSettings::hullFaces) instead of Bullet's GJK per triangle. Off: the adapter's default.
+  bool hull_faces = false;
   // Bodies at rest may sleep (Bullet's deactivation, ODE's auto-disable), after which their pairs
   // are not collided. Off: every body stays awake (benchmarks of resting piles).
   bool sleeping = true;

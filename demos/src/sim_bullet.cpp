@@ -158,6 +158,7 @@ class BulletSimulation final : public Simulation {
         settings.meshContacts = options.mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
                                                                         : boxtree::MeshContactPolicy::triangle_pairs;
       settings.meshCoherence = options.mesh_coherence;
+      settings.hullFaces = options.hull_faces;
       boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get(), settings);
     }
 #endif
@@ -207,6 +208,7 @@ class BulletSimulation final : public Simulation {
           auto* hull = new btConvexHullShape();
           for (const Vec3& v : spec.mesh->vertices) hull->addPoint(bt(v), false);
           hull->recalcLocalAabb();
+          if (boxtree_ && options.hull_faces) hull->initializePolyhedralFeatures();
           shape = own(hull);
           break;
         }
