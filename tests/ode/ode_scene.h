@@ -91,6 +91,10 @@ class DropWorld {
   // The drop scene's terrain, and `bodies` (spheres, boxes, capsules and cylinders) on it.
   DropWorld(Ground ground, const std::vector<demo::BodySpec>& bodies, const char* method = "aabb")
       : ground_kind_(ground) {
+    // Refused before anything of ODE's exists, so that a refusal leaks nothing.
+    for (const demo::BodySpec& spec : bodies)
+      if (spec.shape == demo::Shape::convex || spec.shape == demo::Shape::mesh)
+        throw std::invalid_argument(std::string("DropWorld: no ") + demo::shape_name(spec.shape) + " bodies");
     world_ = dWorldCreate();
     space_ = dHashSpaceCreate(nullptr);
     joints_ = dJointGroupCreate(0);
@@ -182,8 +186,8 @@ class DropWorld {
         geom = dCreateCylinder(space_, r, length);
         dMassSetCylinderTotal(&mass, m, 3, r, length);
         break;
-      default:
-        throw std::invalid_argument(std::string("DropWorld: no ") + demo::shape_name(spec.shape) + " bodies");
+      default:  // refused by the constructor
+        return;
     }
     dBodyID body = dBodyCreate(world_);
     dBodySetMass(body, &mass);
