@@ -119,7 +119,11 @@ bool segments_meet(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q
 
 // True if the corners are on one line (exactly): the triangle is the segment between its
 // extreme corners.
-bool is_flat(const Vec3& a, const Vec3& b, const Vec3& c) { return projection_axis(a, b, c) < 0; }
+// projection_axis(a, b, c) < 0, with the axes in another order (z first: a terrain's facets are
+// seen with area along it, so one sign decides instead of three).
+bool is_flat(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return orient2d_sign(a, b, c, 2) == 0 && orient2d_sign(a, b, c, 0) == 0 && orient2d_sign(a, b, c, 1) == 0;
+}
 
 // The extreme corners of a degenerate (collinear) triangle: the least and greatest in
 // lexicographic order, which on a line are its two ends. A point when all three coincide.
