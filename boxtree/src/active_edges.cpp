@@ -120,6 +120,8 @@ EdgeContact InternalEdgeCorrection::operator()(ContactPoint& contact) const {
     if ((p + t * e - feature).norm() <= tolerance) {
       ++on_edges;
       if (active_edges_ & (1u << k)) touches_active = true;
+      // The verdict below is settled: on an active edge, or on an edge of a facet with none.
+      if (touches_active || active_edges_ == 0) break;
     }
   }
   // Interior contacts keep their normal (it is a face contact of the shape, e.g. a box corner),

@@ -305,6 +305,8 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
   constexpr int kNext[3] = {1, 2, 0};
   constexpr int kAfterNext[3] = {2, 0, 1};
   const Vec3 local_edges[3] = {local[1] - local[0], local[2] - local[1], local[0] - local[2]};
+  // Each edge's length, for the parallel test of its three crosses.
+  const Real edge_lengths[3] = {local_edges[0].norm(), local_edges[1].norm(), local_edges[2].norm()};
   for (int k = 0; k < 3; ++k) {
     const int i = kNext[k];
     const int j = kAfterNext[k];
@@ -315,7 +317,7 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
       u[i] = -e[j];
       u[j] = e[i];
       const Real len = u.norm();
-      if (!(len > 1e-6 * e.norm())) continue;
+      if (!(len > 1e-6 * edge_lengths[t])) continue;
       const Real inverse = 1 / len;
       const Real p0 = u[i] * local[0][i] + u[j] * local[0][j];
       const Real p1 = u[i] * local[1][i] + u[j] * local[1][j];
