@@ -539,7 +539,9 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
 #if defined(__SSE2__)
     if (shape.edge_columns) {
       // Edges k and k + 1 in the two lanes, from edge_columns: the same dot products as below
-      // ((x0 y0 + x1 y1) + x2 y2), then each pair decided in the same order.
+      // ((x0 y0 + x1 y1) + x2 y2) and the same cone test as edge_pair, as a mask: sign * x < 0 is
+      // x > 0 when sign = -1 (edges[j] . cone[0] < 0) and x < 0 when sign = 1 (both false for
+      // NaN, as the scalar comparisons). The pairs that pass go to edge_axis in the same order.
       const int edge_total = shape.edge_count;
       const Real* columns = shape.edge_columns;
       const auto dot2 = [&](int row, const Vec3& v) {
@@ -548,17 +550,27 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
                                       _mm_mul_pd(_mm_loadu_pd(at + edge_total), _mm_set1_pd(v[1])));
         return _mm_add_pd(xy, _mm_mul_pd(_mm_loadu_pd(at + 2 * edge_total), _mm_set1_pd(v[2])));
       };
+      const __m128d zero = _mm_setzero_pd();
       for (; k + 1 < edge_total; k += 2) {
-        alignas(16) Real dn[2] = {0, 0};
-        if (!tri.degenerate) _mm_store_pd(dn, dot2(0, tri.normal));
-        alignas(16) Real cone_dot[3][3][2];  // [j][c][lane]
+        const __m128d dn = tri.degenerate ? zero : dot2(0, tri.normal);
+        const __m128d dn_above = _mm_cmpgt_pd(dn, zero);
+        const __m128d dn_below = _mm_cmplt_pd(dn, zero);
+        int keep[3];
+        alignas(16) Real first[3][2];  // [j][lane]: edges[j] . cone[0], whose sign is the pair's
         for (int j = 0; j < 3; ++j) {
-          for (int c = 0; c < 3; ++c) _mm_store_pd(cone_dot[j][c], dot2(3 + 3 * c, edges[j]));
+          const __m128d c0 = dot2(3, edges[j]);
+          const __m128d c1 = dot2(6, edges[j]);
+          const __m128d c2 = dot2(9, edges[j]);
+          const __m128d flip = _mm_cmplt_pd(c0, zero);
+          const __m128d above = _mm_or_pd(_mm_or_pd(_mm_cmpgt_pd(c1, zero), _mm_cmpgt_pd(c2, zero)), dn_above);
+          const __m128d below = _mm_or_pd(_mm_or_pd(_mm_cmplt_pd(c1, zero), _mm_cmplt_pd(c2, zero)), dn_below);
+          keep[j] = ~_mm_movemask_pd(_mm_or_pd(_mm_and_pd(flip, above), _mm_andnot_pd(flip, below))) & 3;
+          _mm_store_pd(first[j], c0);
         }
+        if ((keep[0] | keep[1] | keep[2]) == 0) continue;
         for (int lane = 0; lane < 2; ++lane) {
           for (int j = 0; j < 3; ++j) {
-            if (edge_pair(k + lane, j, cone_dot[j][0][lane], cone_dot[j][1][lane], cone_dot[j][2][lane], dn[lane]))
-              return 0;
+            if (((keep[j] >> lane) & 1) && edge_axis(k + lane, j, first[j][lane] < 0 ? Real(-1) : Real(1))) return 0;
           }
         }
       }
