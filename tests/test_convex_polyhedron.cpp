@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -410,6 +411,89 @@ TEST(ContactPolyhedron, FaceRestingOnATriangleGivesItsCorners) {
   // Non-finite triangles give nothing.
   ContactPoint c[kMaxPolyhedronTriangleContacts];
   EXPECT_EQ(contact_polyhedron_triangle(moved, Vec3(std::nan(""), 0, 0), floor[1], floor[2], {}, c), 0);
+}
+
+// The narrowphase reads a polyhedron's corners, faces and edge cones by column (vertex_columns,
+// face_columns, edge_columns) when they are there, and falls back to the per-corner, per-face and
+// per-edge loops over the other fields when they are not: both must give the same contacts to
+// the bit (the same dot products in the same order, min and max taken the same way). Hulls of 8
+// to 64 points on an ellipsoid (edge pairs by normal cone) and prisms of 3 to 12 sides (by
+// parallel class), moved by transform_polyhedron, against triangles around and under them.
+TEST(ContactPolyhedron, ColumnsGiveTheSameContactsAsThePerElementLoops) {
+  test::Random rng(77);
+  const auto same = [](const ContactPoint& a, const ContactPoint& b) {
+    for (int i = 0; i < 3; ++i) {
+      if (std::memcmp(&a.position[i], &b.position[i], sizeof(Real)) != 0) return false;
+      if (std::memcmp(&a.normal[i], &b.normal[i], sizeof(Real)) != 0) return false;
+    }
+    return std::memcmp(&a.depth, &b.depth, sizeof(Real)) == 0;
+  };
+  int compared = 0;
+  int contacts = 0;
+  ConvexPolyhedron placed;
+  for (int hull_index = 0; hull_index < scaled(24); ++hull_index) {
+    std::vector<Vec3> points;
+    std::vector<std::vector<int>> faces;
+    const Vec3 stretch = test::vec3_z_first([&] { return rng.uniform(0.2, 0.6); });
+    if (hull_index % 4 != 3) {
+      const int count = 8 << (hull_index % 4);  // 8, 16, 32
+      const int points_count = hull_index % 8 == 6 ? 64 : count;
+      for (int i = 0; i < points_count; ++i) points.push_back(rng.unit_vector().cwiseProduct(stretch));
+      faces = brute_force_hull(points);
+    } else {
+      const int count = rng.integer(3, 12);
+      for (int i = 0; i < count; ++i) {
+        const Real angle = 2 * kPi * i / count;
+        points.emplace_back(stretch.x() * std::cos(angle), stretch.y() * std::sin(angle), -stretch.z());
+      }
+      for (int i = 0; i < count; ++i) points.push_back(points[std::size_t(i)] + Vec3(0, 0, 2 * stretch.z()));
+      std::vector<int> bottom, top;
+      for (int i = 0; i < count; ++i) {
+        bottom.push_back(count - 1 - i);
+        top.push_back(count + i);
+        faces.push_back({i, (i + 1) % count, count + (i + 1) % count, count + i});
+      }
+      faces.push_back(bottom);
+      faces.push_back(top);
+    }
+    const ConvexPolyhedron hull = make_convex_polyhedron(points, faces);
+    for (int pose_index = 0; pose_index < 20; ++pose_index) {
+      const Mat3 turn = rng.rotation();
+      const Vec3 offset = rng.point(-20, 20);
+      transform_polyhedron(hull, {turn, offset}, placed);
+      ConvexPolyhedron by_element = placed;
+      by_element.vertex_columns.clear();
+      by_element.face_columns.clear();
+      by_element.edge_columns.clear();
+      for (int trial = 0; trial < 100; ++trial) {
+        std::array<Vec3, 3> t;
+        if (trial % 2 == 0) {
+          for (Vec3& corner : t) corner = offset + rng.point(-0.7, 0.7);
+        } else {
+          // A wide facet under the hull, tilted, its height across the hull's bottom.
+          const Real height = rng.uniform(-0.8, 0.2);
+          const Vec3 base = offset + Vec3(0, 0, height);
+          const Real tilt_x = rng.uniform(-0.3, 0.3);
+          const Real tilt_y = rng.uniform(-0.3, 0.3);
+          t = {base + Vec3(-1, -1, -tilt_x - tilt_y), base + Vec3(1, -1, tilt_x - tilt_y),
+               base + Vec3(0, 1.5, 1.5 * tilt_y)};
+          if (trial % 4 == 3) std::swap(t[1], t[2]);
+        }
+        ContactOptions options;
+        if (trial % 3 == 1) options.margin = 0.05;
+        if (trial % 5 == 2) options.two_sided = false;
+        ContactPoint a[kMaxPolyhedronTriangleContacts];
+        ContactPoint b[kMaxPolyhedronTriangleContacts];
+        const int n = contact_polyhedron_triangle(placed, t[0], t[1], t[2], options, a);
+        ASSERT_EQ(contact_polyhedron_triangle(by_element, t[0], t[1], t[2], options, b), n)
+            << hull_index << " " << pose_index << " " << trial;
+        for (int i = 0; i < n; ++i) ASSERT_TRUE(same(a[i], b[i])) << hull_index << " " << pose_index << " " << trial;
+        ++compared;
+        contacts += n;
+      }
+    }
+  }
+  EXPECT_GT(contacts, compared / 4);  // most cases touch: the comparison covers the contact paths
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 //
 //   pair_replay --bodies 500 --cells 256 --settle 160 --repeats 50
 //   perf record pair_replay --midphase boxtree --only cylinder --repeats 2000
+//   pair_replay --terrain rough --mix hull64 --only convex   (scene_matrix's hull64 scene)
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Drop scene: the terrain-body pairs at one moment, replayed, built-in vs boxtree"};
   int bodies = 500, cells = 256, settle = 160, repeats = 50, rounds = 3;
   std::uint64_t seed = 1;
-  std::string only_name, midphase = "both", method = "aabb", engine = "ode", terrain_name = "bowl";
+  std::string only_name, midphase = "both", method = "aabb", engine = "ode", terrain_name = "bowl", mix_name = "mixed";
   app.add_option("--bodies", bodies, "Bodies in the scene")->capture_default_str();
   app.add_option("--cells", cells, "Terrain cells per side")->capture_default_str();
   app.add_option("--settle", settle, "Steps before the replay (the built-in world)")->capture_default_str();
@@ -34,6 +35,9 @@ int main(int argc, char** argv) {
   app.add_option("--terrain", terrain_name, "bowl, rough or flat (scene_matrix's terrains)")
       ->capture_default_str()
       ->check(CLI::IsMember({"bowl", "rough", "flat"}));
+  app.add_option("--mix", mix_name,
+                 "Bodies of the scene (scene.h's BodyMix: mixed, hull8 ... hull64 for hulls of 8 to 64 points, ...)")
+      ->capture_default_str();
   app.add_option("--only", only_name,
                  "Replay only the bodies of this shape (sphere, box, capsule, cylinder, convex, mesh)");
   app.add_option("--engine", engine, "ode or bullet")->capture_default_str()->check(CLI::IsMember({"ode", "bullet"}));
@@ -63,7 +67,11 @@ int main(int argc, char** argv) {
     terrain.cells = cells;
     for (demo::TerrainKind kind : {demo::TerrainKind::bowl, demo::TerrainKind::rough, demo::TerrainKind::flat})
       if (terrain_name == demo::terrain_kind_name(kind)) terrain.kind = kind;
-    const demo::Scene scene = demo::make_scene(terrain, bodies, seed);
+    demo::SceneOptions scene_options;
+    scene_options.terrain = terrain;
+    scene_options.bodies = bodies;
+    if (!demo::parse_body_mix(mix_name, &scene_options.mix)) throw boxtree::Error("unknown mix '" + mix_name + "'");
+    const demo::Scene scene = demo::make_scene(scene_options, seed);
     demo::SimOptions builtin_options;
     builtin_options.max_contacts_per_pair = max_contacts;
     demo::SimOptions boxtree_options = builtin_options;
@@ -97,10 +105,10 @@ int main(int argc, char** argv) {
       }
     }
     std::printf(
-        "%s drop scene, %s terrain %d^2, %d bodies, poses after %d steps, every terrain pair x %d, fastest of %d "
+        "%s drop scene, %s terrain %d^2, %d %s bodies, poses after %d steps, every terrain pair x %d, fastest of %d "
         "rounds, %d contacts per call at most\n",
-        engine == "bullet" ? "Bullet" : "ODE", terrain_name.c_str(), cells, bodies, settle, repeats, rounds,
-        max_contacts);
+        engine == "bullet" ? "Bullet" : "ODE", terrain_name.c_str(), cells, bodies, mix_name.c_str(), settle, repeats,
+        rounds, max_contacts);
     std::printf("%-18s %8s | %10s %9s %9s | %10s %9s %9s | %7s\n", "pair kind", "pairs",
                 engine == "bullet" ? "Bullet us" : "OPCODE us", "contacts", "triangles", "boxtree us", "contacts",
                 "triangles", "ratio");

@@ -164,6 +164,16 @@ Polytope polytope_of_polyhedron(const ConvexPolyhedron& polyhedron) {
   // 12 corners, 30 edges): classes 18.7, cones 20.5 us per terrain call; on random hulls
   // without parallel edges (12 to 32 corners) the cones are 1.9-2.5x faster per triangle.
   p.edges_by_cone = p.direction_count * (p.vertex_count + 3) > 8 * p.edge_count;
+  const auto columns = [](const std::vector<Real>& values, std::size_t expected) {
+    return values.size() == expected && expected > 0 ? values.data() : nullptr;
+  };
+  p.vertex_columns = columns(polyhedron.vertex_columns, 3 * polyhedron.vertices.size());
+  p.face_columns = polyhedron.face_width.size() == polyhedron.faces.size()
+                       ? columns(polyhedron.face_columns, 5 * polyhedron.faces.size())
+                       : nullptr;
+  p.edge_columns = polyhedron.edge_cone.size() == 3 * polyhedron.edge_from.size()
+                       ? columns(polyhedron.edge_columns, 12 * polyhedron.edge_from.size())
+                       : nullptr;
   return p;
 }
 

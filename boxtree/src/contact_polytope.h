@@ -61,6 +61,11 @@ struct Polytope {
   const int* loops = nullptr;
   const Vec3* edge_cone = nullptr;
   bool edges_by_cone = false;
+  // Polyhedra: ConvexPolyhedron's vertex_columns, face_columns and edge_columns (null when they
+  // do not match the counts); the loops over all corners, faces and edge cones read these.
+  const Real* vertex_columns = nullptr;
+  const Real* face_columns = nullptr;
+  const Real* edge_columns = nullptr;
 
   PolytopeFace face(int f) const {
     return {faces[f].normal, faces[f].offset, face_begin[f + 1] - face_begin[f], sides + face_begin[f]};

@@ -11,6 +11,10 @@
 #include <cmath>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "boxtree/contact.h"
 #include "boxtree/geometry.h"
 #include "contact_polytope.h"
@@ -37,6 +41,45 @@ constexpr Real kFaceBias = 0.05;
   return r;
 }
 
+// project_points over a polyhedron's vertex_columns (x, y, z rows of `count`): each value is
+// (u0 x + u1 y) + u2 z, the products and sums of Vec3::dot in its order, so equal to
+// u.dot(corner) to the bit, and the same least and greatest value (taken in two lanes, then of
+// the lanes: only a +0 and a -0 could come out the other way round). With SSE2, two corners per
+// instruction: minpd(a, b) is a < b ? a : b, so minpd(x, lo) is std::min(lo, x) (and maxpd the
+// same for std::max), as in packed_tree.cpp.
+[[gnu::noinline]] Interval project_columns(const Real* columns, int count, const Vec3& u) {
+  const Real* x = columns;
+  const Real* y = columns + count;
+  const Real* z = columns + 2 * count;
+  Real lo = kInf;
+  Real hi = -kInf;
+  int i = 0;
+#if defined(__SSE2__)
+  const __m128d u0 = _mm_set1_pd(u[0]);
+  const __m128d u1 = _mm_set1_pd(u[1]);
+  const __m128d u2 = _mm_set1_pd(u[2]);
+  __m128d lo2 = _mm_set1_pd(kInf);
+  __m128d hi2 = _mm_set1_pd(-kInf);
+  for (; i + 1 < count; i += 2) {
+    const __m128d xy = _mm_add_pd(_mm_mul_pd(u0, _mm_loadu_pd(x + i)), _mm_mul_pd(u1, _mm_loadu_pd(y + i)));
+    const __m128d value = _mm_add_pd(xy, _mm_mul_pd(u2, _mm_loadu_pd(z + i)));
+    lo2 = _mm_min_pd(value, lo2);
+    hi2 = _mm_max_pd(value, hi2);
+  }
+  alignas(16) Real lanes[4];
+  _mm_store_pd(lanes, lo2);
+  _mm_store_pd(lanes + 2, hi2);
+  lo = std::min(lanes[0], lanes[1]);
+  hi = std::max(lanes[2], lanes[3]);
+#endif
+  for (; i < count; ++i) {
+    const Real value = (u[0] * x[i] + u[1] * y[i]) + u[2] * z[i];
+    lo = std::min(lo, value);
+    hi = std::max(hi, value);
+  }
+  return {lo, hi};
+}
+
 [[gnu::always_inline]] inline Interval project(const Polytope& p, const Vec3& u) {
   if (p.kind == Polytope::Kind::kBox) {
     // Centre and radius: three dot products instead of eight.
@@ -44,6 +87,7 @@ constexpr Real kFaceBias = 0.05;
     const Real radius = p.half_extents.dot((p.axes.transpose() * u).cwiseAbs());
     return {c - radius, c + radius};
   }
+  if (p.vertex_columns) return project_columns(p.vertex_columns, p.vertex_count, u);
   return project_points(p.vertices, p.vertex_count, u);
 }
 
@@ -114,26 +158,30 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
   }
   // Lines v - t*N through the triangle's corners against the shape's bounding half-spaces
   // (Cyrus-Beck): the largest t is the deepest point of the shape under that corner.
-  for (int j = 0; j < 3 && shape.bound_count > 0; ++j) {
-    Real t_lo = -kInf;
-    Real t_hi = kInf;
-    for (int k = 0; k < shape.bound_count; ++k) {
-      // bound.normal . (v - t N) <= offset  <=>  -t (bound.normal . N) <= offset - bound.normal . v
-      const Real rate = -shape.bounds[k].normal.dot(normal);
+  // The three lines in one pass over the half-spaces (a half-space's rate is the same for all
+  // three); each line's bounds are still met in the half-spaces' order.
+  Real t_lo[3] = {-kInf, -kInf, -kInf};
+  Real t_hi[3] = {kInf, kInf, kInf};
+  for (int k = 0; k < shape.bound_count; ++k) {
+    // bound.normal . (v - t N) <= offset  <=>  -t (bound.normal . N) <= offset - bound.normal . v
+    const Real rate = -shape.bounds[k].normal.dot(normal);
+    for (int j = 0; j < 3; ++j) {
       const Real room = -shape.bounds[k].signed_distance_scaled(tri.v[j]);
       if (std::abs(rate) <= kEps) {
-        if (room < -slack) t_hi = -kInf;
+        if (room < -slack) t_hi[j] = -kInf;
         continue;
       }
       const Real t = room / rate;
       if (rate > 0) {
-        t_hi = std::min(t_hi, t);
+        t_hi[j] = std::min(t_hi[j], t);
       } else {
-        t_lo = std::max(t_lo, t);
+        t_lo[j] = std::max(t_lo[j], t);
       }
     }
-    if (t_lo <= t_hi + slack && std::isfinite(t_hi) && count < kScratchContacts) {
-      out[count++] = make_contact(tri.v[j], normal, t_hi);
+  }
+  for (int j = 0; j < 3 && shape.bound_count > 0; ++j) {
+    if (t_lo[j] <= t_hi[j] + slack && std::isfinite(t_hi[j]) && count < kScratchContacts) {
+      out[count++] = make_contact(tri.v[j], normal, t_hi[j]);
     }
   }
   return count;
@@ -399,12 +447,59 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   // Apart by more than the margin along any axis: no contact, the other axes need not be tried
   // (most candidates of a query volume are apart along the triangle's normal or a face's).
   if (separation > margin) return 0;
-  for (int f = 0; f < shape.face_count && shape.kind != Polytope::Kind::kBox; ++f) {
-    const Vec3 n = -shape.faces[f].normal;
-    const auto [ov, reverse] = overlaps_both_ways_on_face(f, n);
-    separation = std::max(separation, -std::min(ov, reverse));
-    if (separation > margin) return 0;
-    consider(best_face, {n, ov, AxisKind::kShapeFace, f, 0});
+  if (shape.face_columns) {
+    // The loop below over face_columns: per face the triangle's corners on the inward normal
+    // (the dot products of project(tri, n) in their order), their least and greatest, and the
+    // two overlaps, with the same operations, then the same decisions face by face.
+    const int faces = shape.face_count;
+    const Real* nx = shape.face_columns;
+    const Real* ny = nx + faces;
+    const Real* nz = ny + faces;
+    const Real* lo = nz + faces;
+    const Real* hi = lo + faces;
+    const Vec3& a = tri.v[0];
+    const Vec3& b = tri.v[1];
+    const Vec3& c = tri.v[2];
+    const auto decide = [&](int f, Real along, Real reverse) {
+      separation = std::max(separation, -std::min(along, reverse));
+      if (along < best_face.overlap) best_face = {-shape.faces[f].normal, along, AxisKind::kShapeFace, f, 0};
+      return separation > margin;
+    };
+    int f = 0;
+#if defined(__SSE2__)
+    // Faces f and f + 1 in the two lanes; std::max(p, q) is maxpd(q, p), std::min(p, q) minpd(q, p).
+    const auto along_axis = [&](const Vec3& v, int at) {
+      const __m128d xy = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(nx + at), _mm_set1_pd(v[0])),
+                                    _mm_mul_pd(_mm_loadu_pd(ny + at), _mm_set1_pd(v[1])));
+      return _mm_add_pd(xy, _mm_mul_pd(_mm_loadu_pd(nz + at), _mm_set1_pd(v[2])));
+    };
+    for (; f + 1 < faces; f += 2) {
+      const __m128d pa = along_axis(a, f);
+      const __m128d pb = along_axis(b, f);
+      const __m128d pc = along_axis(c, f);
+      const __m128d top = _mm_max_pd(pc, _mm_max_pd(pb, pa));
+      const __m128d bottom = _mm_min_pd(pc, _mm_min_pd(pb, pa));
+      alignas(16) Real along[2];
+      alignas(16) Real reverse[2];
+      _mm_store_pd(along, _mm_sub_pd(top, _mm_loadu_pd(lo + f)));
+      _mm_store_pd(reverse, _mm_sub_pd(_mm_loadu_pd(hi + f), bottom));
+      if (decide(f, along[0], reverse[0]) || decide(f + 1, along[1], reverse[1])) return 0;
+    }
+#endif
+    for (; f < faces; ++f) {
+      const Real pa = (nx[f] * a[0] + ny[f] * a[1]) + nz[f] * a[2];
+      const Real pb = (nx[f] * b[0] + ny[f] * b[1]) + nz[f] * b[2];
+      const Real pc = (nx[f] * c[0] + ny[f] * c[1]) + nz[f] * c[2];
+      if (decide(f, std::max(std::max(pa, pb), pc) - lo[f], hi[f] - std::min(std::min(pa, pb), pc))) return 0;
+    }
+  } else {
+    for (int f = 0; f < shape.face_count && shape.kind != Polytope::Kind::kBox; ++f) {
+      const Vec3 n = -shape.faces[f].normal;
+      const auto [ov, reverse] = overlaps_both_ways_on_face(f, n);
+      separation = std::max(separation, -std::min(ov, reverse));
+      if (separation > margin) return 0;
+      consider(best_face, {n, ov, AxisKind::kShapeFace, f, 0});
+    }
   }
   // Edge pairs: by parallel class (a box's 3, both directions of each cross: the lowest edge of
   // the class is the contact), or, for a polyhedron with many classes, edge by edge through the
@@ -418,25 +513,77 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   if (shape.edges_by_cone) {
     Vec3 edges[3];
     for (int j = 0; j < 3; ++j) edges[j] = tri.v[(j + 1) % 3] - tri.v[j];
-    for (int k = 0; k < shape.edge_count; ++k) {
+    // Edge k against triangle edge j, given cone_dot[c] = edges[j] . cone[c] and
+    // dn = d . tri.normal (0 for a degenerate triangle: it has no sides, every pair in the
+    // shape's cone is kept): the cone test inline, the pairs that pass (a few per edge of the
+    // triangle) in edge_axis. True when the pair's axis separates by more than the margin.
+    const auto edge_axis = [&](int k, int j, Real sign) {
+      const Vec3 d = shape.vertices[shape.edge_to[k]] - shape.vertices[shape.edge_from[k]];
+      const Vec3 u = sign * d.cross(edges[j]);
+      const Real len = u.norm();
+      // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
+      if (!(len > 1e-6 * edges[j].norm() * d.norm())) return false;
+      const Vec3 n = -u / len;
+      // The cone test put -n (the shape's outward normal here) in edge k's cone: the edge is
+      // the shape's support along -n, and its corner gives the shape's projection.
+      const Real overlap = project(tri, n).hi - n.dot(shape.vertices[shape.edge_from[k]]);
+      separation = std::max(separation, -overlap);
+      if (separation > margin) return true;
+      consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
+      return false;
+    };
+    const auto edge_pair = [&](int k, int j, Real cone0, Real cone1, Real cone2, Real dn) {
+      const Real sign = cone0 < 0 ? Real(-1) : Real(1);
+      if (sign * cone1 < 0 || sign * cone2 < 0 || sign * dn < 0) return false;
+      return edge_axis(k, j, sign);
+    };
+    int k = 0;
+#if defined(__SSE2__)
+    if (shape.edge_columns) {
+      // Edges k and k + 1 in the two lanes, from edge_columns: the same dot products as below
+      // ((x0 y0 + x1 y1) + x2 y2) and the same cone test as edge_pair, as a mask: sign * x < 0 is
+      // x > 0 when sign = -1 (edges[j] . cone[0] < 0) and x < 0 when sign = 1 (both false for
+      // NaN, as the scalar comparisons). The pairs that pass go to edge_axis in the same order.
+      const int edge_total = shape.edge_count;
+      const Real* columns = shape.edge_columns;
+      const auto dot2 = [&](int row, const Vec3& v) {
+        const Real* at = columns + row * edge_total + k;
+        const __m128d xy = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(at), _mm_set1_pd(v[0])),
+                                      _mm_mul_pd(_mm_loadu_pd(at + edge_total), _mm_set1_pd(v[1])));
+        return _mm_add_pd(xy, _mm_mul_pd(_mm_loadu_pd(at + 2 * edge_total), _mm_set1_pd(v[2])));
+      };
+      const __m128d zero = _mm_setzero_pd();
+      for (; k + 1 < edge_total; k += 2) {
+        const __m128d dn = tri.degenerate ? zero : dot2(0, tri.normal);
+        const __m128d dn_above = _mm_cmpgt_pd(dn, zero);
+        const __m128d dn_below = _mm_cmplt_pd(dn, zero);
+        int keep[3];
+        alignas(16) Real first[3][2];  // [j][lane]: edges[j] . cone[0], whose sign is the pair's
+        for (int j = 0; j < 3; ++j) {
+          const __m128d c0 = dot2(3, edges[j]);
+          const __m128d c1 = dot2(6, edges[j]);
+          const __m128d c2 = dot2(9, edges[j]);
+          const __m128d flip = _mm_cmplt_pd(c0, zero);
+          const __m128d above = _mm_or_pd(_mm_or_pd(_mm_cmpgt_pd(c1, zero), _mm_cmpgt_pd(c2, zero)), dn_above);
+          const __m128d below = _mm_or_pd(_mm_or_pd(_mm_cmplt_pd(c1, zero), _mm_cmplt_pd(c2, zero)), dn_below);
+          keep[j] = ~_mm_movemask_pd(_mm_or_pd(_mm_and_pd(flip, above), _mm_andnot_pd(flip, below))) & 3;
+          _mm_store_pd(first[j], c0);
+        }
+        if ((keep[0] | keep[1] | keep[2]) == 0) continue;
+        for (int lane = 0; lane < 2; ++lane) {
+          for (int j = 0; j < 3; ++j) {
+            if (((keep[j] >> lane) & 1) && edge_axis(k + lane, j, first[j][lane] < 0 ? Real(-1) : Real(1))) return 0;
+          }
+        }
+      }
+    }
+#endif
+    for (; k < shape.edge_count; ++k) {
       const Vec3* cone = shape.edge_cone + 3 * k;
       const Vec3 d = shape.vertices[shape.edge_to[k]] - shape.vertices[shape.edge_from[k]];
-      // A degenerate triangle has no sides: every pair in the shape's cone is kept.
       const Real dn = tri.degenerate ? Real(0) : d.dot(tri.normal);
       for (int j = 0; j < 3; ++j) {
-        const Real sign = edges[j].dot(cone[0]) < 0 ? Real(-1) : Real(1);
-        if (sign * edges[j].dot(cone[1]) < 0 || sign * edges[j].dot(cone[2]) < 0 || sign * dn < 0) continue;
-        const Vec3 u = sign * d.cross(edges[j]);
-        const Real len = u.norm();
-        // Nearly parallel edges: the cross is mostly rounding; the face axes cover that case.
-        if (!(len > 1e-6 * edges[j].norm() * d.norm())) continue;
-        const Vec3 n = -u / len;
-        // The cone test put -n (the shape's outward normal here) in edge k's cone: the edge is
-        // the shape's support along -n, and its corner gives the shape's projection.
-        const Real overlap = project(tri, n).hi - n.dot(shape.vertices[shape.edge_from[k]]);
-        separation = std::max(separation, -overlap);
-        if (separation > margin) return 0;
-        consider(best_edge, {n, overlap, AxisKind::kEdges, k, j, true});
+        if (edge_pair(k, j, edges[j].dot(cone[0]), edges[j].dot(cone[1]), edges[j].dot(cone[2]), dn)) return 0;
       }
     }
   } else if (shape.kind != Polytope::Kind::kBox) {

@@ -161,6 +161,7 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const s
   p.center /= Real(p.vertices.size());
   p.size = corners.extent().norm();
   p.coord = std::max(corners.min.cwiseAbs().maxCoeff(), corners.max.cwiseAbs().maxCoeff());
+  update_columns(p);
   return p;
 }
 
@@ -194,6 +195,33 @@ void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& tran
   Real coord = 0;
   for (const Vec3& v : out.vertices) coord = std::max(coord, v.cwiseAbs().maxCoeff());
   out.coord = coord;
+  update_columns(out);
+}
+
+void update_columns(ConvexPolyhedron& p) {
+  const std::size_t vertices = p.vertices.size();
+  p.vertex_columns.resize(3 * vertices);
+  for (std::size_t i = 0; i < vertices; ++i) {
+    for (int c = 0; c < 3; ++c) p.vertex_columns[c * vertices + i] = p.vertices[i][c];
+  }
+  const std::size_t faces = p.faces.size();
+  p.face_columns.resize(5 * faces);
+  for (std::size_t f = 0; f < faces; ++f) {
+    const Vec3 inward = -p.faces[f].normal;
+    for (int c = 0; c < 3; ++c) p.face_columns[c * faces + f] = inward[c];
+    const Real lo = -p.faces[f].offset;
+    p.face_columns[3 * faces + f] = lo;
+    p.face_columns[4 * faces + f] = lo + (f < p.face_width.size() ? p.face_width[f] : Real(0));
+  }
+  const std::size_t edges = p.edge_from.size();
+  p.edge_columns.resize(12 * edges);
+  for (std::size_t e = 0; e < edges; ++e) {
+    const Vec3 d = p.vertices[p.edge_to[e]] - p.vertices[p.edge_from[e]];
+    for (int c = 0; c < 3; ++c) p.edge_columns[c * edges + e] = d[c];
+    for (int k = 0; k < 3 && 3 * e + k < p.edge_cone.size(); ++k) {
+      for (int c = 0; c < 3; ++c) p.edge_columns[(3 + 3 * k + c) * edges + e] = p.edge_cone[3 * e + k][c];
+    }
+  }
 }
 
 }  // namespace boxtree

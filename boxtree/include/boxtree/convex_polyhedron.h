@@ -42,6 +42,16 @@ struct ConvexPolyhedron {
   Vec3 center = Vec3::Zero();    // mean of the corners: an interior point
   Real size = 0;                 // diagonal of the corners' bounding box
   Real coord = 0;                // largest coordinate magnitude (for rounding tolerances)
+  // The numbers the narrowphase's loops over all corners, faces or edges read, again by
+  // coordinate (structure of arrays), so that those loops run two or four values at a time:
+  // vertex_columns: 3 rows of vertex count, every corner's x, then y, then z; face_columns: 5
+  // rows of face count, the inward normal's (-normal) x, y, z, then -offset and
+  // -offset + face_width (the polyhedron's projection on the inward normal); edge_columns: 12
+  // rows of edge count, to - from (x, y, z), then edge_cone's three vectors (x, y, z each).
+  // Filled by make_convex_polyhedron and transform_polyhedron (update_columns).
+  std::vector<Real> vertex_columns;
+  std::vector<Real> face_columns;
+  std::vector<Real> edge_columns;
 
   int face_count() const { return int(faces.size()); }
 };
@@ -60,5 +70,9 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const s
 // Reuses out's storage, so that a collider can move a hull into a mesh's frame once per call
 // without allocating.
 void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& transform, ConvexPolyhedron& out);
+
+// Fills vertex_columns, face_columns and edge_columns from the other fields (for a polyhedron
+// whose corners, faces or cones were changed by hand).
+void update_columns(ConvexPolyhedron& polyhedron);
 
 }  // namespace boxtree
