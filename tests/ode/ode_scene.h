@@ -93,7 +93,7 @@ class DropWorld {
       : ground_kind_(ground) {
     // Refused before anything of ODE's exists, so that a refusal leaks nothing.
     for (const demo::BodySpec& spec : bodies)
-      if (spec.shape == demo::Shape::convex || spec.shape == demo::Shape::mesh)
+      if (!is_primitive(spec.shape))
         throw std::invalid_argument(std::string("DropWorld: no ") + demo::shape_name(spec.shape) + " bodies");
     world_ = dWorldCreate();
     space_ = dHashSpaceCreate(nullptr);
@@ -164,6 +164,12 @@ class DropWorld {
     }
   }
 
+  // The shapes add_body makes (any other is refused before the world exists, not dropped).
+  static bool is_primitive(demo::Shape shape) {
+    return shape == demo::Shape::sphere || shape == demo::Shape::box || shape == demo::Shape::capsule ||
+           shape == demo::Shape::cylinder;
+  }
+
   void add_body(const demo::BodySpec& spec) {
     dMass mass;
     dGeomID geom = nullptr;
@@ -186,7 +192,7 @@ class DropWorld {
         geom = dCreateCylinder(space_, r, length);
         dMassSetCylinderTotal(&mass, m, 3, r, length);
         break;
-      default:  // refused by the constructor
+      default:  // not is_primitive: refused by the constructor
         return;
     }
     dBodyID body = dBodyCreate(world_);
