@@ -128,7 +128,7 @@ Real reach_of(const MeshPair& meshes) {
 
 TEST(CollideFront, SameFacetPairsAsAFreshDescentOverMotionSequences) {
   Random random(11);
-  std::size_t pairs_seen = 0, kept = 0, pulled = 0, descended = 0;
+  std::size_t pairs_seen = 0, kept = 0, kept_whole = 0, pulled = 0, descended = 0;
   for (const MeshPair& meshes : mesh_pairs()) {
     SCOPED_TRACE(meshes.name);
     ASSERT_NE(meshes.a->tree().packed(), nullptr);
@@ -155,6 +155,7 @@ TEST(CollideFront, SameFacetPairsAsAFreshDescentOverMotionSequences) {
       EXPECT_EQ(std::adjacent_find(want.begin(), want.end()), want.end());
       pairs_seen += want.size();
       kept += front.last_call().kept_apart;
+      kept_whole += front.last_call().kept_whole;
       pulled += front.last_call().pulled_up;
       descended += front.last_call().descended;
       fresh_tests += fresh_stats.volume_tests;
@@ -167,9 +168,11 @@ TEST(CollideFront, SameFacetPairsAsAFreshDescentOverMotionSequences) {
     std::cout << "[          ] " << meshes.name << ": volume tests with the front " << front_tests << ", fresh "
               << fresh_tests << ", largest front " << largest << " records, " << overflows << " overflows\n";
   }
-  // The sequences exercised every branch: contact, resting pairs kept, descents and pull-ups.
+  // The sequences exercised every branch: contact, resting pairs kept (one by one and as whole
+  // subtrees), descents and pull-ups.
   EXPECT_GT(pairs_seen, 500u);
   EXPECT_GT(kept, 0u);
+  EXPECT_GT(kept_whole, 0u);
   EXPECT_GT(pulled, 0u);
   EXPECT_GT(descended, 0u);
 }

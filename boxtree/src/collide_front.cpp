@@ -13,14 +13,10 @@ namespace {
 using Record = CollideFront::Record;
 constexpr int kWidth = PackedAabbTree::kWidth;
 constexpr std::uint32_t kRoot = 0xFFFFFFFFu;  // the root's reference; else inner node * kWidth + slot
-// Record marks in place of an expiry: an inner record (the descent went through the pair; its
-// children follow in preorder), by which tree it split (a cut record's expiry, the motion so far
-// plus a finite distance, is never either), and a leaf pair whose facets may touch (tested on
-// every call).
-constexpr Real kInnerSplitA = std::numeric_limits<Real>::infinity();
-constexpr Real kInnerSplitB = std::numeric_limits<Real>::max();
+// A cut record's expiry for a leaf pair whose facets may touch (tested on every call); as the
+// least expiry of an inner record's subtree, it says that the subtree holds such a pair.
 constexpr Real kAlways = -std::numeric_limits<Real>::infinity();
-bool is_inner(const Record& r) { return r.expiry == kInnerSplitA || r.expiry == kInnerSplitB; }
+bool is_inner(const Record& r) { return r.split != Record::kCut; }
 
 std::uint32_t link_of(const PackedAabbTree& tree, std::uint32_t ref) {
   if (ref == kRoot) return tree.root_link();
@@ -43,8 +39,9 @@ Real grid_radius(const PackedAabbTree& tree, Vec3* center) {
 
 // How a subtree of the front came out of a call.
 struct Outcome {
-  bool apart = false;   // every pair of it is apart (its parent may be pulled up)
-  bool tested = false;  // some pair of it had its volumes tested in this call
+  bool apart = false;           // every pair of it is apart (its parent may be pulled up)
+  bool tested = false;          // some pair of it had its volumes tested in this call
+  Real least_expiry = kAlways;  // the least expiry of its cut records (kAlways: one touches)
 };
 
 struct FrontWalk {
@@ -63,15 +60,34 @@ struct FrontWalk {
   std::size_t next = 0;  // the next record of `in`
   bool overflow = false, stopped = false;
 
-  void emit(std::uint32_t x, std::uint32_t y, Real expiry) {
-    if (overflow) return;
-    if (out.size() >= max_records) {
+  // Room for `count` more records in `out`; false (and the overflow noted) past max_records.
+  bool make_room(std::size_t count) {
+    if (overflow) return false;
+    if (out.size() + count > max_records) {
       overflow = true;
-      return;
+      return false;
     }
     // Grown by hand so that a buffer never holds more than max_records records.
-    if (out.size() == out.capacity()) out.reserve(std::min(max_records, std::max<std::size_t>(64, 2 * out.size())));
-    out.push_back({x, y, expiry});
+    if (out.size() + count > out.capacity())
+      out.reserve(std::min(max_records, std::max({std::size_t(64), 2 * out.size(), out.size() + count})));
+    return true;
+  }
+
+  // A cut record: apart until the motion reaches `expiry` (kAlways: tested on every call).
+  Outcome emit_cut(std::uint32_t x, std::uint32_t y, Real expiry, bool apart, bool tested) {
+    if (make_room(1)) out.push_back({x, y, expiry, 1, Record::kCut});
+    return {apart, tested, expiry};
+  }
+  // An inner record; its subtree's span and least expiry are filled in by close_inner.
+  std::size_t open_inner(std::uint32_t x, std::uint32_t y, std::uint8_t split) {
+    const std::size_t at = out.size();
+    if (make_room(1)) out.push_back({x, y, kAlways, 1, split});
+    return at;
+  }
+  void close_inner(std::size_t at, Real least_expiry) {
+    if (overflow || at >= out.size()) return;
+    out[at].span = std::uint32_t(out.size() - at);
+    out[at].expiry = least_expiry;
   }
 
   // A lower bound of the distance between the box of a's node x and the box of b's node y (in
@@ -137,10 +153,7 @@ struct FrontWalk {
   // A pair met in this call: its volumes tested, and descended from if they may overlap.
   Outcome test(std::uint32_t x, std::uint32_t y) {
     const Real distance = distance_bound(x, y);
-    if (distance > 0) {
-      emit(x, y, travel + distance);
-      return {true, true};
-    }
+    if (distance > 0) return emit_cut(x, y, travel + distance, true, true);
     const std::uint32_t link_x = link_of(a, x);
     const std::uint32_t link_y = link_of(b, y);
     if (PackedAabbTree::is_leaf(link_x) && PackedAabbTree::is_leaf(link_y)) {
@@ -149,70 +162,74 @@ struct FrontWalk {
       ++stats.leaf_tests;
       if (detail::facets_intersect(a.mesh(), fa, b.mesh(), fb, a_from_b)) {
         if (!visit(FacetPair{fa, fb})) stopped = true;
-        emit(x, y, kAlways);
-        return {false, true};
+        return emit_cut(x, y, kAlways, false, true);
       }
       // Apart facets in overlapping boxes (most leaf pairs of a resting contact): kept apart by
       // their own distance, so that they are not tested again while the motion stays below it.
       const Real facets_apart = facet_distance_bound(fa, fb);
-      if (facets_apart > 0) {
-        emit(x, y, travel + facets_apart);
-        return {true, true};
-      }
-      emit(x, y, kAlways);
-      return {false, true};
+      if (facets_apart > 0) return emit_cut(x, y, travel + facets_apart, true, true);
+      return emit_cut(x, y, kAlways, false, true);
     }
     ++front_stats.descended;
     ++stats.nodes_visited;
     const bool split_a = splits_a(x, y, link_x, link_y);
-    emit(x, y, split_a ? kInnerSplitA : kInnerSplitB);
+    const std::size_t at = open_inner(x, y, split_a ? Record::kSplitA : Record::kSplitB);
     std::uint32_t child[kWidth];
     const int count = children(split_a ? a : b, split_a ? link_x : link_y, child);
-    for (int i = 0; i < count && !stopped; ++i) {
-      if (split_a) {
-        test(child[i], y);
-      } else {
-        test(x, child[i]);
-      }
-    }
-    return {false, true};
+    Real least = std::numeric_limits<Real>::infinity();
+    for (int i = 0; i < count && !stopped; ++i)
+      least = std::min(least, (split_a ? test(child[i], y) : test(x, child[i])).least_expiry);
+    close_inner(at, least);
+    return {false, true, least};
   }
 
   // The next record of the last front and its subtree.
+  // A subtree whose cut records all stay apart (the motion is below their least expiry, so none
+  // touches) is copied as it is, without a visit per record: what visiting it would write.
   Outcome resume() {
-    const Record r = in[next++];
+    const Record r = in[next];
     ++stats.nodes_visited;
-    if (!is_inner(r)) {
-      if (r.expiry != kAlways && travel < r.expiry) {
+    if (r.expiry != kAlways && travel < r.expiry) {
+      const std::size_t span = r.span;
+      if (make_room(span))
+        out.insert(out.end(), in.begin() + std::ptrdiff_t(next), in.begin() + std::ptrdiff_t(next + span));
+      if (!is_inner(r)) {
         ++front_stats.kept_apart;
-        emit(r.a, r.b, r.expiry);
-        return {true, false};
+      } else {
+        ++front_stats.kept_whole;
+        for (std::size_t i = next; i < next + span; ++i) front_stats.kept_apart += !is_inner(in[i]);
       }
+      next += span;
+      return {true, false, r.expiry};
+    }
+    ++next;
+    if (!is_inner(r)) {
       ++front_stats.retested;
       return test(r.a, r.b);
     }
-    const std::size_t at = out.size();
-    emit(r.a, r.b, r.expiry);
-    const bool split_a = r.expiry == kInnerSplitA;
+    const std::size_t at = open_inner(r.a, r.b, r.split);
+    const bool split_a = r.split == Record::kSplitA;
     std::uint32_t child[kWidth];
     const int count = split_a ? children(a, link_of(a, r.a), child) : children(b, link_of(b, r.b), child);
     bool apart = true, tested = false;
+    Real least = std::numeric_limits<Real>::infinity();
     for (int i = 0; i < count; ++i) {
       if (stopped) return {false, true};
       const Outcome o = resume();
       apart = apart && o.apart;
       tested = tested || o.tested;
+      least = std::min(least, o.least_expiry);
     }
     if (apart && tested) {
       const Real distance = distance_bound(r.a, r.b);
       if (distance > 0) {
         ++front_stats.pulled_up;
         if (!overflow) out.resize(at);
-        emit(r.a, r.b, travel + distance);
-        return {true, true};
+        return emit_cut(r.a, r.b, travel + distance, true, true);
       }
     }
-    return {false, tested};
+    close_inner(at, least);
+    return {false, tested, least};
   }
 };
 

@@ -28,9 +28,9 @@
 // Volumes are tested on their six face axes, padded against rounding, and skipped only when
 // apart by more than the pad: no pair a fresh descent reports is missed.
 //
-// Memory: the front is kept as the descended part of the test tree in preorder, 16 bytes per
+// Memory: the front is kept as the descended part of the test tree in preorder, 24 bytes per
 // record, at most CollideFront::max_records() records (8,192 by default), in two buffers (the
-// last front and the one being written): at most 2 x 16 x max_records bytes, 256 KiB per pair of
+// last front and the one being written): at most 2 x 24 x max_records bytes, 384 KiB per pair of
 // meshes by default. A call whose front would pass the cap is completed without keeping one; the
 // front and its memory are dropped and the next kFreshCallsAfterOverflow calls descend fresh
 // (packed_tree.h's collide), then one tries again. A visitor that stops the walk (returns false)
@@ -55,6 +55,7 @@ struct FrontStats {
   std::size_t records_in = 0;   // records the call started from (0: a fresh descent)
   std::size_t records_out = 0;  // records kept for the next call
   std::size_t kept_apart = 0;   // front pairs not tested again (their distance covers the motion)
+  std::size_t kept_whole = 0;   // subtrees of inner records kept as they were, without a visit per record
   std::size_t retested = 0;     // front pairs tested again
   std::size_t descended = 0;    // pairs descended from (overlapping volumes, not a leaf pair)
   std::size_t pulled_up = 0;    // pairs whose children were replaced by the pair
@@ -70,13 +71,20 @@ class CollideFront {
  public:
   static constexpr std::size_t kDefaultMaxRecords = 8192;
   static constexpr int kFreshCallsAfterOverflow = 16;
-  // A record: a pair of node references (the root, or an inner node's child slot) and either the
-  // motion after which the pair must be tested again, or a mark (inner record, overlapping leaves).
+  // A record: a pair of node references (the root, or an inner node's child slot). A cut record
+  // (a pair of the front) holds the motion after which the pair must be tested again (-infinity:
+  // on every call, a leaf pair that may touch). An inner record (a pair descended through, its
+  // children following in preorder) holds by which tree it split, how many records its subtree
+  // spans (itself included), and the least expiry of the subtree's cut records: while the motion
+  // is below it, the whole subtree is kept as it is, without a visit per record.
   struct Record {
+    enum Split : std::uint8_t { kCut = 0, kSplitA = 1, kSplitB = 2 };
     std::uint32_t a = 0, b = 0;
     Real expiry = 0;
+    std::uint32_t span = 1;
+    std::uint8_t split = kCut;
   };
-  static_assert(sizeof(Record) == 16, "a record is 16 bytes");
+  static_assert(sizeof(Record) == 24, "a record is 24 bytes");
 
   explicit CollideFront(std::size_t max_records = kDefaultMaxRecords) : max_records_(max_records) {}
 
