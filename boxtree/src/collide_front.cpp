@@ -200,7 +200,8 @@ struct FrontWalk {
         for (std::size_t i = next; i < next + span; ++i) front_stats.kept_apart += !is_inner(in[i]);
       }
       next += span;
-      return {true, false, r.expiry};
+      // As a visit would: a cut record is apart; an inner record that is not pulled up is not.
+      return {!is_inner(r), false, r.expiry};
     }
     ++next;
     if (!is_inner(r)) {
