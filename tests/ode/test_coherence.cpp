@@ -102,7 +102,7 @@ TEST(OdeCoherence, MeshPileStepsBitIdenticallyWithAndWithoutFronts) {
     const ode::MeshPairCacheInfo info = ode::mesh_pair_cache_info();
     EXPECT_GT(info.pairs, 0u);
     EXPECT_GE(info.steps, std::uint64_t(steps - 1));
-    // Memory per pair: the front's cap (two buffers of 8,192 records of 16 bytes) and the call's facet pairs.
+    // Memory per pair: the front's cap (two buffers of 8,192 records of 24 bytes) and the call's facet pairs.
     EXPECT_LE(info.largest_front, CollideFront::kDefaultMaxRecords);
     EXPECT_LE(info.bytes, info.pairs * (2 * CollideFront::kDefaultMaxRecords * sizeof(CollideFront::Record) + 65536));
     std::printf("[ coherence] %zu pairs kept, %zu bytes, largest front %zu records, %llu evicted\n", info.pairs,

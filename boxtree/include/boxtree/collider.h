@@ -187,7 +187,7 @@ struct MeshContactRequest : ContactRequest {
 // The state one pair of meshes keeps between calls of collide_meshes (one per pair of bodies,
 // freed with the pair): the front of the last tree-vs-tree walk (collide_front.h) and the two
 // trees it belongs to (held, so that a tree cannot die and another take its address while the
-// front refers to it). At most CollideFront's cap in memory (256 KiB by default, measured by
+// front refers to it). At most CollideFront's cap in memory (384 KiB by default, measured by
 // memory_bytes()) plus the last call's facet pairs. A call with other meshes, other trees (a
 // mesh of another method converted: CollisionMesh::tree_as) or mesh and other swapped starts
 // afresh; a call with early_stop, with coherence off, or with trees other than the packed `aabb`

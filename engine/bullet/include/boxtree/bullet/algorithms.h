@@ -39,7 +39,7 @@ struct AlgorithmSettings {
   // by default: chosen by measurement (bench/results/mesh_contacts.txt).
   MeshContactPolicy meshContacts = MeshContactPolicy::face_normals;
   // Mesh vs mesh with temporal coherence (boxtree/collider.h's MeshPairCache): each pair's
-  // algorithm keeps the front of its last tree walk (at most 256 KiB, freed with the pair) and
+  // algorithm keeps the front of its last tree walk (at most 384 KiB, freed with the pair) and
   // starts the next step from it. The contacts are the same bit for bit. Off by default: on a
   // resting pile of meshes it cut the volume tests to 0.37x but took 1.8x the collision time
   // (boxtree/collide_front.h).

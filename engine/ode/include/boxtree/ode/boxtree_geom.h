@@ -117,7 +117,7 @@ void reset_geom_counters(dGeomID geom);
 
 // ---- mesh-vs-mesh coherence state ----
 // ODE has no pair object and no call when two geoms stop overlapping, so the adapter keeps the
-// per-pair state (a MeshPairCache: the front of the last tree walk, at most 256 KiB) in one
+// per-pair state (a MeshPairCache: the front of the last tree walk, at most 384 KiB) in one
 // registry keyed by the ordered geom pair: an entry is made on the pair's first mesh-vs-mesh
 // call, evicted once unseen for 3 steps (a step is inferred: a pair collided again means a new
 // step began), and dropped when either geom is a boxtree geom being destroyed (other geoms, such
