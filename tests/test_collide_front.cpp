@@ -211,6 +211,36 @@ TEST(CollideFront, PulledBackUpAsBodiesSeparate) {
   EXPECT_EQ(front.last_call().kept_apart, 1u);
 }
 
+// A body that zigzags towards the other in small steps, two forward and one back: the records
+// expire by the motion since they were written, so every touching pair is found as a fresh
+// descent finds it, the last one included.
+TEST(CollideFront, ZigzagApproachFindsWhatAFreshDescentFinds) {
+  const auto rock =
+      CollisionMesh::build(std::make_shared<const TriangleMesh>(make_bumpy_sphere(20, 12, 0.15, 7)), Method{});
+  const PackedAabbTree& tree = *rock->tree().packed();
+  RigidTransform pose;
+  pose.translation = Vec3(3.0, 0.3, 0.1);  // apart
+  while (collide(tree, tree, pose).empty()) pose.translation.x() -= 0.01;
+  pose.translation.x() += 0.03;  // 2 to 3 hundredths short of touching
+  const Real step_length = 3e-4 * tree.bounds().extent().norm();
+  CollideFront front;
+  std::size_t touching_calls = 0, kept = 0;
+  for (int step = 0; step < 600; ++step) {
+    pose.translation.x() += step % 3 == 2 ? step_length : -step_length;
+    std::vector<FacetPair> got;
+    collide(tree, tree, pose, front, [&](const FacetPair& p) {
+      got.push_back(p);
+      return true;
+    });
+    const std::vector<FacetPair> want = collide(tree, tree, pose);
+    ASSERT_EQ(sorted(got), want) << "step " << step;
+    touching_calls += !want.empty();
+    kept += front.last_call().kept_apart;
+  }
+  EXPECT_GT(touching_calls, 100u);  // it came into contact, and went deeper
+  EXPECT_GT(kept, 1000u);           // and the front kept pairs on the way
+}
+
 // Past the cap the call still reports every pair, keeps no front (nor its memory) and the next
 // kFreshCallsAfterOverflow calls descend fresh; a stopping visitor drops the front too.
 TEST(CollideFront, CapAndEarlyStop) {
