@@ -1314,6 +1314,53 @@ TEST(ContactCylinder, NoNormalHasALesserOverlap) {
   EXPECT_GT(checked, scaled(400) / 4);
 }
 
+// A triangle beside the cylinder's side, its nearest corner `gap` beyond the rim across the axis
+// (the shadows along the axis apart; the direction across in the triangle's plane, so a normal of
+// its front too): a contact `gap` apart along the direction across the axis
+// while the gap is within the margin, none beyond it, at every orientation and both sidednesses.
+TEST(ContactCylinder, BesideTheSideWithinAndBeyondTheMargin) {
+  Random rng(37);
+  const Real margin = 0.02;
+  for (int trial = 0; trial < scaled(200); ++trial) {
+    const Vec3 axis = rng.unit_vector();  // one draw per statement
+    const Vec3 toward = rng.unit_vector();
+    const Vec3 x = (toward - toward.dot(axis) * axis).normalized();  // across the axis
+    const Vec3 y = axis.cross(x);
+    const Vec3 offset = rng.uniform_vec3(-2, 2);
+    const Real radius = rng.uniform(0.1, 0.5);
+    const Real half = rng.uniform(0.05, 0.6);
+    const Real along = rng.uniform(-half, half);  // the corner's height along the axis
+    const Real tilt = rng.uniform(-0.5, 0.5);     // the triangle's slope along the axis
+    const Vec3 spread = y + tilt * axis;          // the plane of x and this: x lies in it
+    const Vec3 p0 = offset - half * axis;
+    const Vec3 p1 = offset + half * axis;
+    for (const Real gap : {margin / 2, margin * 1.5}) {
+      const Vec3 a = offset + along * axis + (radius + gap) * x;
+      const Vec3 b = a + x - spread;
+      const Vec3 c = a + x + spread;
+      for (const bool two_sided : {false, true}) {
+        ContactOptions options;
+        options.margin = margin;
+        options.two_sided = two_sided;
+        ContactPoint out[kMaxCylinderTriangleContacts];
+        // Winding toward the cylinder for the one-sided case: the front faces the axis's side.
+        const bool faces = (b - a).cross(c - a).dot(offset - a) > 0;
+        const int n = faces ? contact_cylinder_triangle(p0, p1, radius, a, b, c, options, out)
+                            : contact_cylinder_triangle(p0, p1, radius, a, c, b, options, out);
+        const std::string what = "trial " + std::to_string(trial) + " gap " + std::to_string(gap) +
+                                 (two_sided ? " two-sided" : " one-sided");
+        if (gap > margin) {
+          EXPECT_EQ(n, 0) << what;
+          continue;
+        }
+        ASSERT_GE(n, 1) << what;
+        EXPECT_NEAR(out[0].depth, -gap, 1e-9) << what;
+        EXPECT_NEAR(out[0].normal.dot(x), -1, 1e-6) << what;
+      }
+    }
+  }
+}
+
 TEST(ContactCylinder, LyingAndStandingGiveAPatch) {
   ContactPoint c[kMaxCylinderTriangleContacts];
   // Lying along x, 0.1 deep: the two ends of the lowest line.

@@ -362,6 +362,33 @@ void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real
   }
 }
 
+// Whether the shadow of a triangle along the cylinder's axis (corners x[i], y[i] in a frame of
+// the plane across the axis, about the axis's point there) stays farther than `reach` from that
+// point: then the triangle and the cylinder (whose shadow is the disk of its radius about the
+// point) are apart along the direction between the nearest points of the two shadows by the
+// distance minus the radius. Point-to-segment distances for the edges; the point inside the
+// shadow (the three edges' cross products of one sign) is at distance zero.
+bool shadow_beyond(const Real (&x)[3], const Real (&y)[3], Real reach) {
+  const Real reach_squared = reach * reach;
+  bool positive = true;
+  bool negative = true;
+  for (int i = 0; i < 3; ++i) {
+    const int j = i == 2 ? 0 : i + 1;
+    const Real ex = x[j] - x[i];
+    const Real ey = y[j] - y[i];
+    // The point (the origin) against the edge from corner i to corner j.
+    const Real cross = ex * y[i] - ey * x[i];
+    positive = positive && cross > 0;
+    negative = negative && cross < 0;
+    const Real length_squared = ex * ex + ey * ey;
+    const Real t = length_squared > 0 ? std::clamp(-(x[i] * ex + y[i] * ey) / length_squared, Real(0), Real(1)) : 0;
+    const Real dx = x[i] + t * ex;
+    const Real dy = y[i] + t * ey;
+    if (!(dx * dx + dy * dy > reach_squared)) return false;
+  }
+  return !(positive || negative);
+}
+
 }  // namespace
 
 detail::CylinderTriangleContacts::CylinderTriangleContacts(const Vec3& p0, const Vec3& p1, Real radius)
@@ -369,7 +396,10 @@ detail::CylinderTriangleContacts::CylinderTriangleContacts(const Vec3& p0, const
       axis_(p0, p1, radius),
       mid_((p0 + p1) / 2),
       coord_(std::max(max_abs(p0), max_abs(p1))) {
-  if (axis_.length > 0) rebuilt_ = CylinderSupport(p0, p0 + axis_.length * axis_.u, radius);
+  if (axis_.length > 0) {
+    rebuilt_ = CylinderSupport(p0, p0 + axis_.length * axis_.u, radius);
+    detail::orthonormal_completion(axis_.u, across0_, across1_);
+  }
 }
 
 int contact_cylinder_triangle(const Vec3& p0, const Vec3& p1, Real radius, const Vec3& a, const Vec3& b, const Vec3& c,
@@ -409,6 +439,22 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
   const Real half = length / 2;
   const Real margin = std::max(options.margin, Real(0));
   const Real limit = -margin - tolerance(size, std::max(tri.coord, coord_));
+  {
+    // The shadows along the axis apart by more than the margin and twice the tolerance: the two
+    // are apart along a direction across the axis by more than `limit` asks of the candidates
+    // below, which then return nothing (the push-out too: a cylinder meeting the triangle's
+    // prism on both sides of its plane meets the triangle), so nothing is returned here without
+    // them. This settles the query box's candidates beside the cylinder (beyond its side) at
+    // the cost of a 2D point-triangle distance.
+    Real x[3];
+    Real y[3];
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 d = tri.v[i] - mid_;
+      x[i] = across0_.dot(d);
+      y[i] = across1_.dot(d);
+    }
+    if (shadow_beyond(x, y, radius - limit + tolerance(size, std::max(tri.coord, coord_)))) return 0;
+  }
   Real pushed_depth = 0;
   Vec3 pushed_point = Vec3::Zero();
   if (one_sided && tri.signed_distance(mid) < 0) {

@@ -38,6 +38,10 @@ class CylinderTriangleContacts {
   CylinderSupport rebuilt_;
   Vec3 mid_ = Vec3::Zero();  // (p0 + p1) / 2
   Real coord_ = 0;           // max(max_abs(p0), max_abs(p1))
+  // Unit vectors completing axis_.u to an orthonormal frame (when length > 0): the plane of the
+  // cylinder's shadow along its axis, a disk of radius `radius` about mid_.
+  Vec3 across0_ = Vec3::Zero();
+  Vec3 across1_ = Vec3::Zero();
 };
 
 }  // namespace boxtree::detail
