@@ -213,6 +213,86 @@ TEST(Collider, ConvexShapesMatchPerFacetBruteForce) {
   EXPECT_GT(total, 1000u);  // the scenes do make contacts
 }
 
+// The sphere collider makes the exact triangle test itself and hands its closest point to the
+// narrowphase: its candidates are exactly the facets triangle_overlaps_sphere gives for the sphere
+// grown by the margin, its counts those of contact_sphere_triangle and the edge rule on them, and
+// its contacts theirs bit for bit (compared where no two share a position, so that the merge of
+// exact duplicates cannot keep different ones).
+TEST(Collider, SphereCandidatesAndContactsAreThePerFacetRoutinesBitForBit) {
+  Random random(43);
+  std::size_t compared = 0, beyond_radius = 0;
+  for (const Scene& scene : scenes()) {
+    const CollisionMesh& mesh = *scene.mesh;
+    const TriangleMesh& m = mesh.mesh();
+    for (int trial = 0; trial < test::scaled(200); ++trial) {
+      const Real s = scene.size * random.uniform(0.3, 1.0);
+      const Sphere sphere{near_surface(m, random, s), s};
+      ContactRequest request;
+      request.two_sided = random.chance(0.5);
+      request.margin = random.chance(0.5) ? 0.2 * s : 0;
+      request.internal_edges = random.chance(0.7);
+      request.max_contacts = kAll;
+      request.merge_distance = 0;
+      ContactResult result;
+      collide_convex(mesh, sphere, request, result);
+
+      ContactOptions options;
+      options.margin = request.margin;
+      options.two_sided = request.two_sided || !mesh.consistent_winding();
+      CollisionCounts want;
+      std::vector<ContactPoint> contacts;
+      for (FacetId f = 0; f < m.facet_count(); ++f) {
+        const Vec3 &a = m.corner(f, 0), &b = m.corner(f, 1), &c = m.corner(f, 2);
+        if (!triangle_overlaps_sphere(a, b, c, Sphere{sphere.center, sphere.radius + request.margin})) continue;
+        ++want.candidates;
+        beyond_radius += !triangle_overlaps_sphere(a, b, c, sphere);
+        ContactPoint out[kMaxSphereTriangleContacts];
+        const int n = contact_sphere_triangle(sphere, a, b, c, options, out);
+        want.found += std::size_t(n);
+        for (int i = 0; i < n; ++i) {
+          out[i].facet = f;
+          if (request.internal_edges) {
+            const EdgeContact verdict = correct_internal_edge_contact(out[i], a, b, c, mesh.active_edges()[f]);
+            if (verdict == EdgeContact::discard) {
+              ++want.edge_discarded;
+              continue;
+            }
+            if (verdict == EdgeContact::corrected) ++want.edge_corrected;
+          }
+          contacts.push_back(out[i]);
+        }
+      }
+      SCOPED_TRACE(testing::Message() << scene.name << " trial " << trial << " two_sided " << request.two_sided
+                                      << " margin " << request.margin << " edges " << request.internal_edges);
+      EXPECT_EQ(result.counts.candidates, want.candidates);
+      EXPECT_EQ(result.counts.found, want.found);
+      EXPECT_EQ(result.counts.edge_corrected, want.edge_corrected);
+      EXPECT_EQ(result.counts.edge_discarded, want.edge_discarded);
+      const auto by_place = [](const ContactPoint& x, const ContactPoint& y) {
+        return std::make_tuple(x.position.x(), x.position.y(), x.position.z(), x.depth) <
+               std::make_tuple(y.position.x(), y.position.y(), y.position.z(), y.depth);
+      };
+      std::sort(contacts.begin(), contacts.end(), by_place);
+      const bool shared_place = std::adjacent_find(contacts.begin(), contacts.end(), [](const auto& x, const auto& y) {
+                                  return x.position == y.position;
+                                }) != contacts.end();
+      if (shared_place) continue;
+      std::vector<ContactPoint> got = result.contacts;
+      std::sort(got.begin(), got.end(), by_place);
+      ASSERT_EQ(got.size(), contacts.size());
+      for (std::size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].position, contacts[i].position);
+        EXPECT_EQ(got[i].normal, contacts[i].normal);
+        EXPECT_EQ(got[i].depth, contacts[i].depth);
+        EXPECT_EQ(got[i].facet, contacts[i].facet);
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 500u);      // the scenes do make contacts
+  EXPECT_GT(beyond_radius, 20u);  // and candidates only the margin reaches
+}
+
 // An engine's own narrowphase (here the core's box routine, two-sided as the collider asks):
 // on one-sided facets no contact ever pushes the shape out through a facet's back, and where the
 // engine's normal is already in front the contacts are the engine's.

@@ -154,16 +154,17 @@ std::vector<TreeForm> every_tree_form(const TriangleMesh& mesh) {
 template <class Shape>
 void expect_nothing(const std::vector<TreeForm>& forms, const Shape& shape, const std::string& what) {
   for (const TreeForm& form : forms) {
-    for (FacetTest test : {FacetTest::exact_triangle, FacetTest::leaf_volume}) {
+    for (FacetTest test : {FacetTest::exact_triangle, FacetTest::leaf_volume, FacetTest::none}) {
       const std::vector<FacetId> got = form.overlap(shape, test);
-      EXPECT_TRUE(got.empty()) << form.name << ", " << what << (test == FacetTest::leaf_volume ? " (leaf volumes)" : "")
-                               << ": " << got.size() << " facets";
+      EXPECT_TRUE(got.empty()) << form.name << ", " << what << " (facet test " << int(test) << "): " << got.size()
+                               << " facets";
     }
   }
 }
 
 // A valid shape: brute force's facets, of which some must be reported (else an invalid twin at the
-// same place would prove nothing), and a superset of the reported ones in leaf-volume mode.
+// same place would prove nothing), a superset of the reported ones in leaf-volume mode, and a
+// superset of those without a facet test.
 template <class Shape>
 void expect_brute_force(const std::vector<TreeForm>& forms, const TriangleMesh& mesh, const Shape& shape,
                         const std::string& what, Real tolerance = kTolerance) {
@@ -175,6 +176,9 @@ void expect_brute_force(const std::vector<TreeForm>& forms, const TriangleMesh& 
     const std::vector<FacetId> leaves = form.overlap(shape, FacetTest::leaf_volume);
     EXPECT_TRUE(std::includes(leaves.begin(), leaves.end(), got.begin(), got.end()))
         << form.name << ", " << what << " (leaf volumes)";
+    const std::vector<FacetId> reached = form.overlap(shape, FacetTest::none);
+    EXPECT_TRUE(std::includes(reached.begin(), reached.end(), leaves.begin(), leaves.end()))
+        << form.name << ", " << what << " (no facet test)";
   }
 }
 

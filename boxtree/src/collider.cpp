@@ -14,7 +14,9 @@ namespace boxtree {
 namespace {
 
 // Steps 1-5 of collider.h for one query volume: `per_facet(a, b, c, options, out)` is the
-// narrowphase for one triangle and returns how many contacts it wrote (at most `Capacity`).
+// narrowphase for one triangle and returns how many contacts it wrote (at most `Capacity`). Under
+// FacetTest::none it also makes the exact triangle test, and returns -1 for a facet that fails it
+// (which is then no candidate).
 template <int Capacity, class Query, class PerFacet>
 void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test, const ContactRequest& request,
                   const ContactOptions& options, ContactResult& result, PerFacet&& per_facet) {
@@ -25,11 +27,12 @@ void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test,
   mesh.tree().query_overlap(
       query,
       [&](FacetId facet) {
-        ++result.counts.candidates;
         const Vec3& a = m.corner(facet, 0);
         const Vec3& b = m.corner(facet, 1);
         const Vec3& c = m.corner(facet, 2);
         const int n = per_facet(a, b, c, options, found);
+        if (n < 0) return true;
+        ++result.counts.candidates;
         result.counts.found += std::size_t(n);
         if (n > 0) {
           const InternalEdgeCorrection correct_edge(a, b, c,
@@ -153,10 +156,15 @@ void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const Conta
     return;
   }
   const ContactOptions options = options_for(mesh, request, result);
+  // The exact test is triangle_overlaps_sphere's on the grown sphere, and its closest point is
+  // the narrowphase's.
+  const Sphere query{sphere.center, sphere.radius + request.margin};
   run_pipeline<kMaxSphereTriangleContacts>(
-      mesh, Sphere{sphere.center, sphere.radius + request.margin}, FacetTest::exact_triangle, request, options, result,
+      mesh, query, FacetTest::none, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
-        return contact_sphere_triangle(sphere, a, b, c, o, out);
+        const Vec3 closest = closest_point_on_triangle(query.center, a, b, c);
+        if (!((closest - query.center).squaredNorm() <= query.radius * query.radius)) return -1;
+        return detail::contact_sphere_triangle_from(sphere, a, b, c, closest, o, out);
       });
   reduce(request, result);
 }

@@ -100,6 +100,11 @@ inline Vec3 perpendicular_to(const Vec3& d) {
   return b1;
 }
 
+// contact_sphere_triangle given `closest`, which must be closest_point_on_triangle(sphere.center,
+// a, b, c) (for callers that have it already): the same contacts.
+int contact_sphere_triangle_from(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& closest,
+                                 const ContactOptions& options, ContactPoint* out);
+
 // Inward normals of the triangle's side walls (the prism over it along its normal):
 // wall(i) . (x - v[i]) >= 0 for points over the triangle.
 inline Vec3 inward_wall(const TriangleFrame& tri, int i) { return tri.normal.cross(tri.v[(i + 1) % 3] - tri.v[i]); }

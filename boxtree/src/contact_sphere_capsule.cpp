@@ -76,11 +76,17 @@ bool clip_segment_to_prism(const Vec3& p0, const Vec3& p1, const TriangleFrame& 
 
 int contact_sphere_triangle(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c,
                             const ContactOptions& options, ContactPoint* out) {
+  return detail::contact_sphere_triangle_from(sphere, a, b, c, closest_point_on_triangle(sphere.center, a, b, c),
+                                              options, out);
+}
+
+int detail::contact_sphere_triangle_from(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c,
+                                         const Vec3& closest, const ContactOptions& options, ContactPoint* out) {
   if (!finite(a, b, c) || !sphere.center.allFinite() || !std::isfinite(sphere.radius)) return 0;
   const TriangleFrame tri(a, b, c);
   const Real r = sphere.radius;
   const Vec3& p = sphere.center;
-  const Vec3 q = closest_point_on_triangle(p, a, b, c);
+  const Vec3& q = closest;
   const Vec3 d = p - q;
   const Real distance = d.norm();
   if (!(distance <= r + std::max(options.margin, Real(0)))) return 0;  // also rejects NaN

@@ -897,7 +897,7 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
         tree,
         [&](const PackedAabbTree::Node& node) {
           const unsigned mask = faces.overlaps(node, grid.overlaps(node));
-          if (test == FacetTest::exact_triangle) return mask;
+          if (test != FacetTest::leaf_volume) return mask;
           const unsigned leaves = mask & leaf_slots(node);
           return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
                  (mask & ~leaves);
@@ -912,7 +912,7 @@ void query_overlap(const PackedAabbTree& tree, const Shape& shape, FunctionRef<b
         tree,
         [&](const PackedAabbTree::Node& node) {
           const unsigned mask = sphere.overlaps(node, grid.overlaps(node));
-          if (test == FacetTest::exact_triangle) return mask;
+          if (test != FacetTest::leaf_volume) return mask;
           const unsigned leaves = mask & leaf_slots(node);
           return refine_mask(tree, node, leaves, [&](const Aabb& box) { return overlaps(box, shape); }) |
                  (mask & ~leaves);

@@ -141,7 +141,7 @@ void all_hits_of(const View& tree, const Ray& ray, FunctionRef<bool(const RayHit
       sink.local);
 }
 
-// An invalid shape (shapes.h) matches nothing, in both FacetTest modes: checked here once, so
+// An invalid shape (shapes.h) matches nothing, in every FacetTest mode: checked here once, so
 // that no volume or triangle test has to read a negative radius or an inverted box the same way.
 template <class View, class Shape>
 void overlap_of(const View& tree, const Shape& shape, FunctionRef<bool(FacetId)> visit, QueryStats* stats,

@@ -65,6 +65,8 @@ enum class FacetTest {
   exact_triangle,  // the facet's triangle overlaps the shape (default)
   leaf_volume,     // only the facet's leaf volume overlaps it: a superset, for engines that
                    // run their own exact test per candidate (like Bullet's processAllTriangles)
+  none,            // every facet the walk reaches, without a test of its own: a superset of
+                   // leaf_volume's, for callers whose per-facet work starts with the exact test
 };
 
 // Facets overlapping a query shape, given in the tree's frame. Shape is one of Aabb, Obb,

@@ -102,10 +102,17 @@ int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int s
 }
 
 int collide_sphere(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
-  const Sphere sphere{mesh_from(o1, o2).translation, dGeomSphereGetRadius(o2)};
-  return collide_with(
-      o1, o2, flags, contact, skip, sphere.radius,
-      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) { collide_convex(m, sphere, r, res); });
+  // collide_with for a sphere, which needs only its centre in the mesh's frame (mesh_from's
+  // translation, the same expression), with the mesh's pose read once.
+  GeomObject& object = *object_of(o1);
+  const ContactArray out{o1, o2, flags, contact, skip};
+  const RigidTransform world_from_mesh = pose_of(o1);
+  const dReal* p = dGeomGetPosition(o2);
+  const Sphere sphere{world_from_mesh.rotation.transpose() * (Vec3(p[0], p[1], p[2]) - world_from_mesh.translation),
+                      dGeomSphereGetRadius(o2)};
+  ContactResult& result = scratch_result();
+  collide_convex(*object.mesh, sphere, request_for(object, out, sphere.radius), result);
+  return write_contacts(object, out, world_from_mesh, result, false);
 }
 
 int collide_box(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
