@@ -41,8 +41,8 @@
 // descends fresh for them).
 //
 // The engine adapters leave it off by default: on a resting pile it tests far fewer volumes than
-// a fresh descent but takes longer, since every record of the front is visited on every call
-// (figures: bench/RESULTS.md, "Notes from earlier measurements").
+// a fresh descent, but takes about as long in ODE and longer in Bullet (figures: bench/RESULTS.md,
+// "Notes from earlier measurements").
 #include <cstdint>
 #include <vector>
 
