@@ -8,6 +8,7 @@
 // the mesh's surface (as dCollideSTL does); depth >= 0 (contacts within the margin touch).
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "boxtree/collider.h"
@@ -90,29 +91,34 @@ RigidTransform mesh_from(dGeomID mesh, dGeomID other) {
           world_from_mesh.rotation.transpose() * (world_from_other.translation - world_from_mesh.translation)};
 }
 
-// Runs `collide(mesh, request, result)` for a convex geom of size `shape_size` and writes.
+// Runs `collide(mesh, request, result)` for a convex geom of size `shape_size` and writes, the
+// mesh at `world_from_mesh` (its pose, pose_of(o1)).
 template <class Collide>
 int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip, Real shape_size,
-                 Collide&& collide) {
+                 const RigidTransform& world_from_mesh, Collide&& collide) {
   GeomObject& object = *object_of(o1);
   const ContactArray out{o1, o2, flags, contact, skip};
   ContactResult& result = scratch_result();
   collide(*object.mesh, request_for(object, out, shape_size), result);
-  return write_contacts(object, out, pose_of(o1), result, false);
+  return write_contacts(object, out, world_from_mesh, result, false);
+}
+
+template <class Collide>
+int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip, Real shape_size,
+                 Collide&& collide) {
+  return collide_with(o1, o2, flags, contact, skip, shape_size, pose_of(o1), std::forward<Collide>(collide));
 }
 
 int collide_sphere(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
-  // collide_with for a sphere, which needs only its centre in the mesh's frame (mesh_from's
-  // translation, the same expression), with the mesh's pose read once.
-  GeomObject& object = *object_of(o1);
-  const ContactArray out{o1, o2, flags, contact, skip};
+  // Only the sphere's centre is needed in the mesh's frame (mesh_from's translation, the same
+  // expression), with the mesh's pose read once.
   const RigidTransform world_from_mesh = pose_of(o1);
   const dReal* p = dGeomGetPosition(o2);
   const Sphere sphere{world_from_mesh.rotation.transpose() * (Vec3(p[0], p[1], p[2]) - world_from_mesh.translation),
                       dGeomSphereGetRadius(o2)};
-  ContactResult& result = scratch_result();
-  collide_convex(*object.mesh, sphere, request_for(object, out, sphere.radius), result);
-  return write_contacts(object, out, world_from_mesh, result, false);
+  return collide_with(
+      o1, o2, flags, contact, skip, sphere.radius, world_from_mesh,
+      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) { collide_convex(m, sphere, r, res); });
 }
 
 int collide_box(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
