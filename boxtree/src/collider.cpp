@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "boxtree/active_edges.h"
 #include "boxtree/geometry.h"
@@ -147,10 +148,8 @@ int apply_front(const SupportShape& shape, const Vec3& a, const Vec3& b, const V
   return kept;
 }
 
-}  // namespace
-
-void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
-                    ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
+                   ContactResult& result) {
   if (!is_valid(sphere) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -169,7 +168,7 @@ void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const Conta
   reduce(request, result);
 }
 
-void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result) {
   if (!is_valid(box) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -182,8 +181,8 @@ void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequ
   reduce(request, result);
 }
 
-void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
-                    ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
+                   ContactResult& result) {
   if (!is_valid(capsule) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -197,8 +196,8 @@ void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const Con
   reduce(request, result);
 }
 
-void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
-                    ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
+                   ContactResult& result) {
   if (!cylinder.p0.allFinite() || !cylinder.p1.allFinite() || !(cylinder.radius >= 0) ||
       !std::isfinite(cylinder.radius) || !valid_request(request)) {
     result.counts.invalid_input = true;
@@ -213,8 +212,8 @@ void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const C
   reduce(request, result);
 }
 
-void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
-                    ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
+                   ContactResult& result) {
   if (!finite(hull.mesh_from_local) || !(hull.rounding >= 0) || !std::isfinite(hull.rounding) ||
       !valid_request(request) || hull.local.vertices.empty()) {
     result.counts.invalid_input = true;
@@ -240,8 +239,8 @@ void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, con
   reduce(request, result);
 }
 
-void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
-                    ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
+                   ContactResult& result) {
   if (!finite(hull.mesh_from_local) || !valid_request(request) || hull.local.empty()) {
     result.counts.invalid_input = true;
     return;
@@ -267,6 +266,209 @@ void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const C
         return contact_convex_triangle(shape, a, b, c, o, out);
       });
   reduce(request, result);
+}
+
+}  // namespace
+
+// ---- ConvexPairCache ----
+
+namespace detail {
+
+// The input of one collide_convex call as bytes: the placement (the shape's numbers in the mesh's
+// frame, the request, the tree's identity, a hull's address and sizes) and a hull's arrays. Built
+// in per-thread storage, so that a warm call does not allocate.
+struct ConvexPairCacheAccess {
+  std::vector<unsigned char>& placement;
+  std::vector<unsigned char>& hull;
+
+  static ConvexPairCacheAccess scratch() {
+    thread_local std::vector<unsigned char> placement_bytes, hull_bytes;
+    placement_bytes.clear();
+    hull_bytes.clear();
+    return {placement_bytes, hull_bytes};
+  }
+
+  // The bytes of plain values: numbers, pointers, and Eigen's fixed-size vectors (their
+  // coefficients) and aggregates of them. Padding bytes could only make equal inputs unequal (a
+  // call that collides again), never the reverse.
+  template <class T>
+  static void append(std::vector<unsigned char>& bytes, const T& value) {
+    static_assert(std::is_standard_layout_v<T>);
+    const auto* p = reinterpret_cast<const unsigned char*>(&value);
+    bytes.insert(bytes.end(), p, p + sizeof(T));
+  }
+  template <class T>
+  static void append_array(std::vector<unsigned char>& bytes, const std::vector<T>& values) {
+    static_assert(std::is_standard_layout_v<T>);
+    append(bytes, values.size());
+    const auto* p = reinterpret_cast<const unsigned char*>(values.data());
+    bytes.insert(bytes.end(), p, p + values.size() * sizeof(T));
+  }
+  // Eigen's fixed-size vectors and matrices are their coefficients (no padding).
+  void add(Real x) { append(placement, x); }
+  void add(const Vec3& v) {
+    for (int k = 0; k < 3; ++k) add(v[k]);
+  }
+  void add(const Mat3& m) {
+    for (int k = 0; k < 9; ++k) add(m.data()[k]);
+  }
+  void add(const RigidTransform& t) {
+    add(t.rotation);
+    add(t.translation);
+  }
+
+  void add_request(const CollisionMesh& mesh, const ContactRequest& request) {
+    append(placement, mesh.tree().identity());
+    add(request.margin);
+    append(placement, request.two_sided);
+    append(placement, request.internal_edges);
+    append(placement, request.max_contacts);
+    add(request.merge_distance);
+    append(placement, request.early_stop);
+  }
+
+  void add_shape(const Sphere& sphere) {
+    append(placement, 's');
+    add(sphere.center);
+    add(sphere.radius);
+  }
+  void add_shape(const Obb& box) {
+    append(placement, 'b');
+    add(box.center);
+    add(box.axes);
+    add(box.half_extents);
+  }
+  void add_shape(const Capsule& capsule) {
+    append(placement, 'c');
+    add(capsule.p0);
+    add(capsule.p1);
+    add(capsule.radius);
+  }
+  void add_shape(const Cylinder& cylinder) {
+    append(placement, 'y');
+    add(cylinder.p0);
+    add(cylinder.p1);
+    add(cylinder.radius);
+  }
+  void add_shape(const PlacedPolyhedron& placed) {
+    const ConvexPolyhedron& p = placed.local;
+    append(placement, 'h');
+    add(placed.mesh_from_local);
+    add(placed.rounding);
+    append(placement, &p);
+    for (std::size_t size : {p.vertices.size(), p.faces.size(), p.loops.size(), p.edge_from.size()})
+      append(placement, size);
+  }
+  void add_shape(const PlacedPoints& placed) {
+    append(placement, 'p');
+    add(placed.mesh_from_local);
+    append(placement, &placed.local);
+    append(placement, placed.local.size());
+  }
+
+  // A hull's arrays: every one the narrowphase reads (a polyhedron's columns too: they are read,
+  // not recomputed). The other shapes are their placement.
+  template <class Shape>
+  static constexpr bool kHasHull = std::is_same_v<Shape, PlacedPolyhedron> || std::is_same_v<Shape, PlacedPoints>;
+  template <class Shape>
+  void add_hull(const Shape&) {}
+  void add_hull(const PlacedPolyhedron& placed) {
+    const ConvexPolyhedron& p = placed.local;
+    append_array(hull, p.vertices);
+    append_array(hull, p.faces);
+    append_array(hull, p.face_width);
+    append_array(hull, p.face_begin);
+    append_array(hull, p.loops);
+    append_array(hull, p.sides);
+    append_array(hull, p.edge_from);
+    append_array(hull, p.edge_to);
+    append_array(hull, p.edge_direction);
+    append_array(hull, p.edge_cone);
+    append_array(hull, p.directions);
+    append(hull, p.center);
+    append(hull, p.size);
+    append(hull, p.coord);
+    append_array(hull, p.vertex_columns);
+    append_array(hull, p.face_columns);
+    append_array(hull, p.edge_columns);
+  }
+  void add_hull(const PlacedPoints& placed) { append_array(hull, placed.local); }
+
+  // The call: the cache's contacts when its last input equals this one, else `collide` and the
+  // input and contacts kept.
+  template <class Shape>
+  static void collide(ConvexPairCache* cache, const CollisionMesh& mesh, const Shape& shape,
+                      const ContactRequest& request, ContactResult& result) {
+    if (!cache) return collide_shape(mesh, shape, request, result);
+    result.clear();
+    ConvexPairCacheAccess input = scratch();
+    input.add_shape(shape);
+    input.add_request(mesh, request);
+    ConvexPairCache& c = *cache;
+    const bool same_placement = c.placed_ && c.placement_ == input.placement;
+    if (same_placement) input.add_hull(shape);
+    const bool same_hull = same_placement && c.hull_copied_ && c.hull_ == input.hull;
+    if (same_hull) {
+      result.contacts.assign(c.contacts_.begin(), c.contacts_.end());
+      result.counts.reused = true;
+      result.counts.two_sided_fallback = c.two_sided_fallback_;
+      return;
+    }
+    collide_shape(mesh, shape, request, result);
+    if (result.counts.invalid_input) {
+      c.clear();
+      return;
+    }
+    if (c.tree_.identity() != mesh.tree().identity()) c.tree_ = mesh.tree();
+    c.placement_.swap(input.placement);
+    c.placed_ = true;
+    // A hull's arrays are copied when its placement is the last call's: a body at rest.
+    c.hull_copied_ = same_placement || !kHasHull<Shape>;
+    c.hull_.swap(input.hull);
+    c.contacts_.assign(result.contacts.begin(), result.contacts.end());
+    c.two_sided_fallback_ = result.counts.two_sided_fallback;
+  }
+};
+
+}  // namespace detail
+
+void ConvexPairCache::clear() {
+  tree_ = {};
+  placement_.clear();
+  hull_.clear();
+  placed_ = false;
+  hull_copied_ = false;
+  contacts_.clear();
+  two_sided_fallback_ = false;
+}
+
+std::size_t ConvexPairCache::memory_bytes() const {
+  return placement_.capacity() + hull_.capacity() + contacts_.capacity() * sizeof(ContactPoint);
+}
+
+void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
+                    ContactResult& result, ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, sphere, request, result);
+}
+void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result,
+                    ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, box, request, result);
+}
+void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
+                    ContactResult& result, ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, capsule, request, result);
+}
+void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
+                    ContactResult& result, ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, cylinder, request, result);
+}
+void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
+                    ContactResult& result, ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, hull, request, result);
+}
+void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
+                    ContactResult& result, ConvexPairCache* cache) {
+  detail::ConvexPairCacheAccess::collide(cache, mesh, hull, request, result);
 }
 
 namespace {

@@ -27,6 +27,10 @@ struct SimOptions {
   // Mesh vs mesh with temporal coherence in the boxtree adapters (Bullet's
   // AlgorithmSettings::meshCoherence, ODE's GeomSettings::mesh_coherence; both off by default).
   bool mesh_coherence = false;
+  // Convex bodies vs meshes with temporal coherence in the boxtree adapters (ODE's
+  // GeomSettings::convex_coherence, Bullet's AlgorithmSettings::convexCoherence; both on by
+  // default): a pair at rest gets its last contacts again while neither body moves.
+  bool convex_coherence = true;
   // Bullet with the boxtree adapter: convex hulls get their polyhedral features
   // (btPolyhedralConvexShape::initializePolyhedralFeatures) and boxtree's exact separating axes
   // (AlgorithmSettings::hullFaces) instead of Bullet's GJK per triangle. Off: the adapter's default.

@@ -158,6 +158,7 @@ class BulletSimulation final : public Simulation {
         settings.meshContacts = options.mesh_contacts == "face-normals" ? boxtree::MeshContactPolicy::face_normals
                                                                         : boxtree::MeshContactPolicy::triangle_pairs;
       settings.meshCoherence = options.mesh_coherence;
+      settings.convexCoherence = options.convex_coherence;
       settings.hullFaces = options.hull_faces;
       boxtree::bullet::registerBoxtreeAlgorithms(dispatcher_.get(), settings);
     }

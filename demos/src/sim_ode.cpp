@@ -47,7 +47,8 @@ class OdeSimulation final : public Simulation {
       : boxtree_(options.boxtree_midphase),
         max_contacts_(options.max_contacts_per_pair),
         mesh_contacts_(options.mesh_contacts),
-        mesh_coherence_(options.mesh_coherence) {
+        mesh_coherence_(options.mesh_coherence),
+        convex_coherence_(options.convex_coherence) {
     if (max_contacts_ < 1 || max_contacts_ > kContactBuffer)
       throw boxtree::Error("max_contacts_per_pair must be 1 to " + std::to_string(kContactBuffer));
 #if !BOXTREE_DEMO_HAVE_ODE_ADAPTER
@@ -225,6 +226,7 @@ class OdeSimulation final : public Simulation {
         settings.mesh_contacts = mesh_contacts_ == "face-normals" ? boxtree::MeshContactPolicy::face_normals
                                                                   : boxtree::MeshContactPolicy::triangle_pairs;
       settings.mesh_coherence = mesh_coherence_;
+      settings.convex_coherence = convex_coherence_;
       boxtree::ode::set_geom_settings(geom, settings);
       mesh_geoms_.push_back(geom);
       return geom;
@@ -338,6 +340,7 @@ class OdeSimulation final : public Simulation {
   int max_contacts_;
   std::string mesh_contacts_;                    // SimOptions::mesh_contacts
   bool mesh_coherence_ = false;                  // SimOptions::mesh_coherence
+  bool convex_coherence_ = true;                 // SimOptions::convex_coherence
   std::unordered_map<dGeomID, Shape> shape_of_;  // every body's geom
   PairKindTime pair_time_[kPairKinds];
   dWorldID world_ = nullptr;

@@ -58,6 +58,7 @@ struct CollisionCounts {
   std::size_t volume_tests = 0;     // mesh vs mesh: volume pairs the tree walk tested
   bool two_sided_fallback = false;  // one-sided asked, but the mesh's winding is inconsistent
   bool invalid_input = false;       // a non-finite pose or an invalid shape: nothing was done
+  bool reused = false;              // the contacts of a ConvexPairCache's last call, no collision work done
 };
 
 struct ContactResult {
@@ -70,6 +71,39 @@ struct ContactResult {
 };
 
 // ---- convex shapes (all in the mesh's frame) ----
+
+namespace detail {
+struct ConvexPairCacheAccess;
+}
+
+// The state one pair of a mesh and a convex body keeps between calls of collide_convex (temporal
+// coherence: one per pair of bodies, freed with the pair). It holds the last call's input, as
+// bytes (the shape as placed in the mesh's frame, the request, the mesh's tree: held, so that a
+// tree cannot die and another take its address), and the contacts that call gave. A call whose
+// input equals the last one bit for bit, such as a body that has not moved relative to the mesh
+// (an engine's disabled or kinematic body at rest), gets those contacts again without any
+// collision work; its counts are zero but for `reused` and `two_sided_fallback`. Any other call
+// collides and keeps its own input and contacts. The contacts are therefore those of a call
+// without the cache, bit for bit, whatever the sequence of calls. A hull's arrays
+// (PlacedPolyhedron, PlacedPoints) are compared too, but copied only on a call whose placement
+// equals the last one, so that a moving hull does not pay for the copy: a hull at rest is
+// reused from its third call on. Memory: the input's bytes and at most max_contacts contacts
+// (memory_bytes()). Not shared between threads.
+class ConvexPairCache {
+ public:
+  void clear();
+  std::size_t memory_bytes() const;
+
+ private:
+  friend struct detail::ConvexPairCacheAccess;
+  AnyTree tree_;
+  std::vector<unsigned char> placement_;  // the shape's placement and numbers, the request
+  std::vector<unsigned char> hull_;       // a hull's arrays, once copied
+  bool placed_ = false;                   // placement_ and tree_ are a call's
+  bool hull_copied_ = false;              // hull_ is that call's hull
+  std::vector<ContactPoint> contacts_;
+  bool two_sided_fallback_ = false;
+};
 
 // A cylinder with axis p0-p1 and the given radius (contact_cylinder_triangle).
 struct Cylinder {
@@ -109,20 +143,24 @@ using TriangleNarrowphase =
     FunctionRef<int(const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& options, ContactPoint* out)>;
 constexpr int kMaxEngineTriangleContacts = 16;
 
+// With `cache` (ConvexPairCache, temporal coherence) a call with the last call's input gets its
+// contacts again; `result` is cleared first then. Without, contacts and counts are added to it.
 void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
-                    ContactResult& result);
-void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result);
+                    ContactResult& result, ConvexPairCache* cache = nullptr);
+void collide_convex(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result,
+                    ConvexPairCache* cache = nullptr);
 void collide_convex(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
-                    ContactResult& result);
+                    ContactResult& result, ConvexPairCache* cache = nullptr);
 void collide_convex(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
-                    ContactResult& result);
+                    ContactResult& result, ConvexPairCache* cache = nullptr);
 void collide_convex(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
-                    ContactResult& result);
+                    ContactResult& result, ConvexPairCache* cache = nullptr);
 void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
-                    ContactResult& result);
+                    ContactResult& result, ConvexPairCache* cache = nullptr);
 // The support shape through GJK/EPA (contact_convex_triangle), or through `narrowphase` when
 // given. Facets whose plane the shape lies wholly above or below by more than the margin are
-// skipped before the narrowphase (two support calls each).
+// skipped before the narrowphase (two support calls each). No ConvexPairCache: a support
+// function's shape cannot be compared between calls.
 void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const ContactRequest& request,
                     ContactResult& result);
 void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, TriangleNarrowphase narrowphase,

@@ -131,7 +131,12 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     request.merge_distance = Real(m_manifold->getContactBreakingThreshold());
     thread_local ContactResult contacts;
     contacts.clear();
-    collide(mesh, *convex, convex_wrap, mesh_wrap, convex_in_mesh, mesh_margin, request, info, contacts);
+    ConvexPairCache* cache = nullptr;
+    if (m_settings->convexCoherence && still(convex_wrap) && still(mesh_wrap)) {
+      if (!m_cache) m_cache = std::make_unique<ConvexPairCache>();
+      cache = m_cache.get();
+    }
+    collide(mesh, *convex, convex_wrap, mesh_wrap, convex_in_mesh, mesh_margin, request, info, contacts, cache);
     mesh.countCollision(contacts.counts);
     const bool mesh_is_result_b = result->getBody1Internal() == mesh_wrap->getCollisionObject();
     add_contacts(*result, mesh, mesh_to_world, mesh_is_result_b, contacts, mesh_margin);
@@ -158,13 +163,20 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   };
 
  private:
+  // An object that does not move by itself: static, kinematic or deactivated.
+  static bool still(const btCollisionObjectWrapper* wrap) {
+    const btCollisionObject* object = wrap->getCollisionObject();
+    return object->isStaticOrKinematicObject() || !object->isActive();
+  }
+
   // The shape in the mesh's (scaled) frame and the collider call for it: spheres, boxes and
   // capsules analytic; hulls with Bullet's faces (AlgorithmSettings::hullFaces) by exact separating
   // axes with the hull's margin as rounding; every other convex shape by its support mapping with
   // Bullet's own per-triangle algorithm (GJK/EPA) as the narrowphase.
   void collide(const BoxtreeMeshShape& mesh, const btConvexShape& convex, const btCollisionObjectWrapper* convex_wrap,
                const btCollisionObjectWrapper* mesh_wrap, const btTransform& convex_in_mesh, Real mesh_margin,
-               const ContactRequest& request, const btDispatcherInfo& info, ContactResult& contacts) {
+               const ContactRequest& request, const btDispatcherInfo& info, ContactResult& contacts,
+               ConvexPairCache* cache) {
     const CollisionMesh& target = mesh.collisionMesh();
     const Vec3 center = to_vec(convex_in_mesh.getOrigin());
     const Mat3 basis = to_mat(convex_in_mesh.getBasis());
@@ -173,16 +185,16 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
       switch (type) {
         case SPHERE_SHAPE_PROXYTYPE:
           return collide_convex(target, Sphere{center, Real(static_cast<const btSphereShape&>(convex).getRadius())},
-                                request, contacts);
+                                request, contacts, cache);
         case BOX_SHAPE_PROXYTYPE:
           return collide_convex(
               target, Obb{center, basis, to_vec(static_cast<const btBoxShape&>(convex).getHalfExtentsWithMargin())},
-              request, contacts);
+              request, contacts, cache);
         case CAPSULE_SHAPE_PROXYTYPE: {
           const auto& capsule = static_cast<const btCapsuleShape&>(convex);
           const Vec3 axis = basis.col(capsule.getUpAxis()) * Real(capsule.getHalfHeight());
           return collide_convex(target, Capsule{center - axis, center + axis, Real(capsule.getRadius())}, request,
-                                contacts);
+                                contacts, cache);
         }
         case CYLINDER_SHAPE_PROXYTYPE: {
           // Bullet's cylinder (btCylinderShape, X or Z variants) with its margin inside its
@@ -191,7 +203,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
           const int up = cylinder.getUpAxis();
           const Vec3 axis = basis.col(up) * Real(cylinder.getHalfExtentsWithMargin()[up]);
           return collide_convex(target, Cylinder{center - axis, center + axis, Real(cylinder.getRadius())}, request,
-                                contacts);
+                                contacts, cache);
         }
         default:
           break;
@@ -199,7 +211,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
       if (const ConvexPolyhedron* hull =
               m_settings->hullFaces && convex.isPolyhedral() ? polyhedronOf(convex) : nullptr)
         return collide_convex(target, PlacedPolyhedron{*hull, to_rigid(convex_in_mesh), Real(convex.getMargin())},
-                              request, contacts);
+                              request, contacts, cache);
     }
     // Any other convex shape: its support mapping (margin included), its box, Bullet's GJK.
     const btMatrix3x3 mesh_to_convex = convex_in_mesh.getBasis().transpose();
@@ -257,6 +269,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   const AlgorithmSettings* m_settings;
   const btConvexPolyhedron* m_polyhedronSource = nullptr;
   std::unique_ptr<const ConvexPolyhedron> m_polyhedron;
+  std::unique_ptr<ConvexPairCache> m_cache;  // AlgorithmSettings::convexCoherence, made on first use
 };
 
 // ---------------------------------------------------------------------------------------------

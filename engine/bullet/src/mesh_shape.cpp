@@ -182,13 +182,14 @@ BoxtreeMeshShape::Counters BoxtreeMeshShape::counters() const {
   c.merged_contacts = m_counters.merged_contacts.load(std::memory_order_relaxed);
   c.dropped_contacts = m_counters.dropped_contacts.load(std::memory_order_relaxed);
   c.mesh_volume_tests = m_counters.mesh_volume_tests.load(std::memory_order_relaxed);
+  c.reused_calls = m_counters.reused_calls.load(std::memory_order_relaxed);
   return c;
 }
 
 void BoxtreeMeshShape::resetCounters() const {
-  for (auto* counter :
-       {&m_counters.queries, &m_counters.triangles, &m_counters.ray_queries, &m_counters.narrowphase_triangles,
-        &m_counters.merged_contacts, &m_counters.dropped_contacts, &m_counters.mesh_volume_tests})
+  for (auto* counter : {&m_counters.queries, &m_counters.triangles, &m_counters.ray_queries,
+                        &m_counters.narrowphase_triangles, &m_counters.merged_contacts, &m_counters.dropped_contacts,
+                        &m_counters.mesh_volume_tests, &m_counters.reused_calls})
     counter->store(0, std::memory_order_relaxed);
 }
 
@@ -197,6 +198,7 @@ void BoxtreeMeshShape::countCollision(const CollisionCounts& counts) const {
   m_counters.merged_contacts.fetch_add(counts.merged, std::memory_order_relaxed);
   m_counters.dropped_contacts.fetch_add(counts.dropped, std::memory_order_relaxed);
   m_counters.mesh_volume_tests.fetch_add(counts.volume_tests, std::memory_order_relaxed);
+  if (counts.reused) m_counters.reused_calls.fetch_add(1, std::memory_order_relaxed);
 }
 
 void BoxtreeMeshShape::getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const {

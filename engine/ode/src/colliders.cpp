@@ -79,6 +79,7 @@ int write_contacts(GeomObject& object, const ContactArray& out, const RigidTrans
   object.merged.fetch_add(result.counts.merged, std::memory_order_relaxed);
   object.dropped.fetch_add(result.counts.dropped, std::memory_order_relaxed);
   object.mesh_volume_tests.fetch_add(result.counts.volume_tests, std::memory_order_relaxed);
+  if (result.counts.reused) object.reused.fetch_add(1, std::memory_order_relaxed);
   object.contacts.fetch_add(std::uint64_t(count), std::memory_order_relaxed);
   return count;
 }
@@ -91,15 +92,24 @@ RigidTransform mesh_from(dGeomID mesh, dGeomID other) {
           world_from_mesh.rotation.transpose() * (world_from_other.translation - world_from_mesh.translation)};
 }
 
-// Runs `collide(mesh, request, result)` for a convex geom of size `shape_size` and writes, the
-// mesh at `world_from_mesh` (its pose, pose_of(o1)).
+// A geom that does not move by itself: static (no body) or with a disabled body.
+bool at_rest(dGeomID geom) {
+  const dBodyID body = dGeomGetBody(geom);
+  return body == nullptr || !dBodyIsEnabled(body);
+}
+
+// Runs `collide(mesh, request, result, cache)` for a convex geom of size `shape_size` and writes,
+// the mesh at `world_from_mesh` (its pose, pose_of(o1)). `cache` is the pair's ConvexPairCache
+// when convex_coherence is on and both geoms are at rest, else null.
 template <class Collide>
 int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip, Real shape_size,
                  const RigidTransform& world_from_mesh, Collide&& collide) {
   GeomObject& object = *object_of(o1);
   const ContactArray out{o1, o2, flags, contact, skip};
   ContactResult& result = scratch_result();
-  collide(*object.mesh, request_for(object, out, shape_size), result);
+  const std::shared_ptr<ConvexPairCache> cache =
+      object.settings.convex_coherence && at_rest(o1) && at_rest(o2) ? convex_pair_cache(o1, o2) : nullptr;
+  collide(*object.mesh, request_for(object, out, shape_size), result, cache.get());
   return write_contacts(object, out, world_from_mesh, result, false);
 }
 
@@ -116,9 +126,10 @@ int collide_sphere(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int
   const dReal* p = dGeomGetPosition(o2);
   const Sphere sphere{world_from_mesh.rotation.transpose() * (Vec3(p[0], p[1], p[2]) - world_from_mesh.translation),
                       dGeomSphereGetRadius(o2)};
-  return collide_with(
-      o1, o2, flags, contact, skip, sphere.radius, world_from_mesh,
-      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) { collide_convex(m, sphere, r, res); });
+  return collide_with(o1, o2, flags, contact, skip, sphere.radius, world_from_mesh,
+                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+                        collide_convex(m, sphere, r, res, cache);
+                      });
 }
 
 int collide_box(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
@@ -126,9 +137,10 @@ int collide_box(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int sk
   dVector3 lengths;
   dGeomBoxGetLengths(o2, lengths);  // full side lengths
   const Obb box{place.translation, place.rotation, Vec3(lengths[0], lengths[1], lengths[2]) * Real(0.5)};
-  return collide_with(
-      o1, o2, flags, contact, skip, box.half_extents.norm(),
-      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) { collide_convex(m, box, r, res); });
+  return collide_with(o1, o2, flags, contact, skip, box.half_extents.norm(),
+                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+                        collide_convex(m, box, r, res, cache);
+                      });
 }
 
 // ODE's capsules and cylinders lie along their local Z, `length` long, centred.
@@ -144,9 +156,10 @@ int collide_capsule(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, in
   Capsule capsule;
   axis_ends(mesh_from(o1, o2), length, capsule.p0, capsule.p1);
   capsule.radius = radius;
-  return collide_with(
-      o1, o2, flags, contact, skip, radius + length / 2,
-      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) { collide_convex(m, capsule, r, res); });
+  return collide_with(o1, o2, flags, contact, skip, radius + length / 2,
+                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+                        collide_convex(m, capsule, r, res, cache);
+                      });
 }
 
 int collide_cylinder(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip) {
@@ -156,8 +169,8 @@ int collide_cylinder(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, i
   axis_ends(mesh_from(o1, o2), length, cylinder.p0, cylinder.p1);
   cylinder.radius = radius;
   return collide_with(o1, o2, flags, contact, skip, std::hypot(radius, length / 2),
-                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) {
-                        collide_convex(m, cylinder, r, res);
+                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+                        collide_convex(m, cylinder, r, res, cache);
                       });
 }
 
@@ -175,14 +188,15 @@ int collide_convex_geom(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact
   for (const Vec3& p : entry->points) local.expand(p);
   const Real size = local.extent().norm() / 2;
   if (entry->polyhedron) {
-    return collide_with(o1, o2, flags, contact, skip, size,
-                        [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) {
-                          collide_convex(m, PlacedPolyhedron{*entry->polyhedron, place, 0}, r, res);
-                        });
+    return collide_with(
+        o1, o2, flags, contact, skip, size,
+        [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+          collide_convex(m, PlacedPolyhedron{*entry->polyhedron, place, 0}, r, res, cache);
+        });
   }
   return collide_with(o1, o2, flags, contact, skip, size,
-                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) {
-                        collide_convex(m, PlacedPoints{entry->points, place}, r, res);
+                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res, ConvexPairCache* cache) {
+                        collide_convex(m, PlacedPoints{entry->points, place}, r, res, cache);
                       });
 }
 
@@ -248,11 +262,13 @@ int collide_plane(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int 
   // The plane in the mesh's frame: n . x = offset.
   const Plane plane{world_from_mesh.rotation.transpose() * world_normal,
                     params[3] - world_normal.dot(world_from_mesh.translation)};
-  const Real size = object_of(o1)->mesh->bounds().extent().norm() * Real(0.5);
-  return collide_with(o1, o2, flags, contact, skip, size,
-                      [&](const CollisionMesh& m, const ContactRequest& r, ContactResult& res) {
-                        collide_half_space(m, plane, r, res);
-                      });
+  // A plane is not a convex body: no ConvexPairCache (collide_with's) for it.
+  GeomObject& object = *object_of(o1);
+  const ContactArray out{o1, o2, flags, contact, skip};
+  ContactResult& result = scratch_result();
+  const Real size = object.mesh->bounds().extent().norm() * Real(0.5);
+  collide_half_space(*object.mesh, plane, request_for(object, out, size), result);
+  return write_contacts(object, out, world_from_mesh, result, false);
 }
 
 // ---- mesh vs mesh ----

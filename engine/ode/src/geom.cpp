@@ -59,7 +59,7 @@ int class_aabb_test(dGeomID self, dGeomID /*other*/, dReal aabb[6]) {
 }
 
 void class_dtor(dGeomID geom) {
-  forget_mesh_pair_caches(geom);
+  forget_pair_caches(geom);
   GeomObject*& slot = slot_of(geom);
   delete slot;
   slot = nullptr;
@@ -303,6 +303,7 @@ void dBoxtreeClose() {
   std::lock_guard<std::mutex> lock(g_class_mutex);
   g_class = -1;
   boxtree::ode::clear_mesh_pair_caches();
+  boxtree::ode::clear_convex_pair_caches();
 }
 
 int dBoxtreeGetClass() { return g_class.load(); }
@@ -387,6 +388,7 @@ CollisionCounters geom_counters(dGeomID geom) {
   counters.dropped = object.dropped.load();
   counters.convexes_read_from_ode = object.convexes_read_from_ode.load();
   counters.convexes_without_data = object.convexes_without_data.load();
+  counters.reused = object.reused.load();
   return counters;
 }
 
@@ -400,6 +402,7 @@ void reset_geom_counters(dGeomID geom) {
   object.dropped = 0;
   object.convexes_read_from_ode = 0;
   object.convexes_without_data = 0;
+  object.reused = 0;
 }
 
 namespace {
@@ -490,6 +493,7 @@ void set_convex(dGeomID convex, const dReal* planes, unsigned plane_count, const
 }
 
 void forget_convex(dGeomID convex) {
+  detail::forget_pair_caches(convex);
   std::lock_guard<std::mutex> lock(detail::g_convex_mutex);
   detail::g_convex_entries.erase(convex);
 }

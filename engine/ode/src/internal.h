@@ -25,6 +25,7 @@ struct GeomObject {
   std::atomic<std::uint64_t> dropped{0};
   std::atomic<std::uint64_t> convexes_read_from_ode{0};
   std::atomic<std::uint64_t> convexes_without_data{0};
+  std::atomic<std::uint64_t> reused{0};
 };
 
 GeomObject* object_of(dGeomID geom);  // nullptr if not a boxtree geom
@@ -53,13 +54,15 @@ std::shared_ptr<const CollisionMesh> trimesh_mesh(dGeomID trimesh, const Method&
 // The collider table lookup (dGeomClass::collider): a pure function of the other class number.
 dColliderFn* collider_for(int other_class);
 
-// Mesh-vs-mesh coherence (pair_cache.cpp): the state of the ordered pair (my geom, the other),
-// made on first use; null when the registry is full (the call then descends fresh).
+// Temporal coherence (pair_cache.cpp): the state of the ordered pair (my geom, the other), made
+// on first use; null when its registry is full (the call then collides without state).
 constexpr std::uint64_t kUnseenSteps = 3;  // entries unseen for more steps are evicted
-constexpr std::size_t kMaxPairs = 1024;
+constexpr std::size_t kMaxMeshPairs = 1024;
+constexpr std::size_t kMaxConvexPairs = 16384;
 std::shared_ptr<MeshPairCache> mesh_pair_cache(dGeomID mine, dGeomID other);
-// Drops every entry of `geom` (its destructor calls it).
-void forget_mesh_pair_caches(dGeomID geom);
+std::shared_ptr<ConvexPairCache> convex_pair_cache(dGeomID mine, dGeomID other);
+// Drops every entry of `geom`, of both kinds (its destructor calls it).
+void forget_pair_caches(dGeomID geom);
 
 // ODE keeps the mask of the contact count private (NUMC_MASK in collision_kernel.h).
 constexpr int kContactCountMask = 0xffff;

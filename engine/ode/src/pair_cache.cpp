@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Mesh-vs-mesh coherence in ODE: the per-pair state (boxtree/collider.h's MeshPairCache) kept by
-// geom pair, since ODE has no pair object and tells nobody when two geoms stop overlapping.
-// Entries age by steps, which ODE does not announce either: a pair collided a second time since
-// the step counter last moved means a new step began (a space's collide visits each overlapping
-// pair once), so the counter moves and every entry unseen for kUnseenSteps steps is evicted.
-// A program that collides one pair twice within its step only evicts earlier (a fresh descent,
-// the same contacts). The registry is capped at kMaxPairs entries (a pair beyond it descends
-// fresh) and each entry at MeshPairCache's own cap.
+// Temporal coherence in ODE: the per-pair state of boxtree/collider.h (MeshPairCache for mesh vs
+// mesh, ConvexPairCache for a convex geom) kept by geom pair, since ODE has no pair object and
+// tells nobody when two geoms stop overlapping. One registry per kind of state. Entries age by
+// steps, which ODE does not announce either: a pair looked up a second time since the registry's
+// step counter last moved means a new step began (a space's collide visits each overlapping pair
+// once), so the counter moves and every entry unseen for kUnseenSteps steps is evicted. A
+// program that collides one pair twice within its step only evicts earlier (the pair's next call
+// collides afresh: the same contacts). Each registry is capped (a pair beyond the cap collides
+// without state) and each entry at its state's own bound.
 #include <algorithm>
 #include <mutex>
 #include <unordered_map>
@@ -26,59 +27,83 @@ struct KeyHash {
     return h(k.mine) * 31 + h(k.other);
   }
 };
+template <class Cache>
 struct Entry {
-  std::shared_ptr<MeshPairCache> cache;
+  std::shared_ptr<Cache> cache;
   std::uint64_t last_step = 0;
 };
+template <class Cache>
 struct Registry {
   std::mutex mutex;
-  std::unordered_map<Key, Entry, KeyHash> entries;
+  std::unordered_map<Key, Entry<Cache>, KeyHash> entries;
   std::uint64_t step = 0;
   std::uint64_t evicted = 0;
+  std::size_t cap = 0;
+
+  std::shared_ptr<Cache> lookup(dGeomID mine, dGeomID other) {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto found = entries.find(Key{mine, other});
+    if (found != entries.end() && found->second.last_step == step) {
+      // Seen already in this step: the next step began. Sweep out the pairs gone unseen.
+      ++step;
+      for (auto it = entries.begin(); it != entries.end();) {
+        if (it->second.last_step + kUnseenSteps < step) {
+          it = entries.erase(it);
+          ++evicted;
+        } else {
+          ++it;
+        }
+      }
+      found = entries.find(Key{mine, other});
+    }
+    if (found == entries.end()) {
+      if (entries.size() >= cap) return nullptr;
+      found = entries.emplace(Key{mine, other}, Entry<Cache>{std::make_shared<Cache>(), step}).first;
+    }
+    found->second.last_step = step;
+    return found->second.cache;
+  }
+
+  void forget(dGeomID geom) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = entries.begin(); it != entries.end();) {
+      if (it->first.mine == geom || it->first.other == geom) {
+        it = entries.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+
+  void clear() {
+    std::lock_guard<std::mutex> lock(mutex);
+    entries.clear();
+  }
 };
+
 // Never destroyed: geoms may be destroyed during static destruction.
-Registry& registry() {
-  static Registry* r = new Registry;
+Registry<MeshPairCache>& mesh_registry() {
+  static auto* r = new Registry<MeshPairCache>{{}, {}, 0, 0, kMaxMeshPairs};
+  return *r;
+}
+Registry<ConvexPairCache>& convex_registry() {
+  static auto* r = new Registry<ConvexPairCache>{{}, {}, 0, 0, kMaxConvexPairs};
   return *r;
 }
 
 }  // namespace
 
 std::shared_ptr<MeshPairCache> mesh_pair_cache(dGeomID mine, dGeomID other) {
-  Registry& r = registry();
-  std::lock_guard<std::mutex> lock(r.mutex);
-  auto found = r.entries.find(Key{mine, other});
-  if (found != r.entries.end() && found->second.last_step == r.step) {
-    // Seen already in this step: the next step began. Sweep out the pairs gone unseen.
-    ++r.step;
-    for (auto it = r.entries.begin(); it != r.entries.end();) {
-      if (it->second.last_step + kUnseenSteps < r.step) {
-        it = r.entries.erase(it);
-        ++r.evicted;
-      } else {
-        ++it;
-      }
-    }
-    found = r.entries.find(Key{mine, other});
-  }
-  if (found == r.entries.end()) {
-    if (r.entries.size() >= kMaxPairs) return nullptr;
-    found = r.entries.emplace(Key{mine, other}, Entry{std::make_shared<MeshPairCache>(), r.step}).first;
-  }
-  found->second.last_step = r.step;
-  return found->second.cache;
+  return mesh_registry().lookup(mine, other);
 }
 
-void forget_mesh_pair_caches(dGeomID geom) {
-  Registry& r = registry();
-  std::lock_guard<std::mutex> lock(r.mutex);
-  for (auto it = r.entries.begin(); it != r.entries.end();) {
-    if (it->first.mine == geom || it->first.other == geom) {
-      it = r.entries.erase(it);
-    } else {
-      ++it;
-    }
-  }
+std::shared_ptr<ConvexPairCache> convex_pair_cache(dGeomID mine, dGeomID other) {
+  return convex_registry().lookup(mine, other);
+}
+
+void forget_pair_caches(dGeomID geom) {
+  mesh_registry().forget(geom);
+  convex_registry().forget(geom);
 }
 
 }  // namespace boxtree::ode::detail
@@ -86,7 +111,7 @@ void forget_mesh_pair_caches(dGeomID geom) {
 namespace boxtree::ode {
 
 MeshPairCacheInfo mesh_pair_cache_info() {
-  detail::Registry& r = detail::registry();
+  auto& r = detail::mesh_registry();
   std::lock_guard<std::mutex> lock(r.mutex);
   MeshPairCacheInfo info;
   info.pairs = r.entries.size();
@@ -99,10 +124,19 @@ MeshPairCacheInfo mesh_pair_cache_info() {
   return info;
 }
 
-void clear_mesh_pair_caches() {
-  detail::Registry& r = detail::registry();
+ConvexPairCacheInfo convex_pair_cache_info() {
+  auto& r = detail::convex_registry();
   std::lock_guard<std::mutex> lock(r.mutex);
-  r.entries.clear();
+  ConvexPairCacheInfo info;
+  info.pairs = r.entries.size();
+  info.steps = r.step;
+  info.evicted = r.evicted;
+  for (const auto& [key, entry] : r.entries) info.bytes += entry.cache->memory_bytes();
+  return info;
 }
+
+void clear_mesh_pair_caches() { detail::mesh_registry().clear(); }
+
+void clear_convex_pair_caches() { detail::convex_registry().clear(); }
 
 }  // namespace boxtree::ode

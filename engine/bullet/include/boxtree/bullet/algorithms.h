@@ -44,6 +44,13 @@ struct AlgorithmSettings {
   // resting pile of meshes it cut the volume tests to 0.37x but took 1.8x the collision time
   // (boxtree/collide_front.h).
   bool meshCoherence = false;
+  // Convex vs mesh with temporal coherence (boxtree/collider.h's ConvexPairCache): a pair in which
+  // neither object moves by itself (static, kinematic or deactivated: a sleeping body against an
+  // awake one, a kinematic body held still) keeps its last input and contacts in its algorithm
+  // (freed with the pair) and gets them again without collision work while neither moves. The
+  // contacts are the same bit for bit. Pairs with an active dynamic body never use it. Shapes
+  // that go through Bullet's GJK (support mappings) collide afresh.
+  bool convexCoherence = true;
 };
 
 void registerBoxtreeAlgorithms(btCollisionDispatcher* dispatcher, const AlgorithmSettings& settings = {});

@@ -123,6 +123,7 @@ class alignas(16) BoxtreeMeshShape : public btConcaveShape {
     std::uint64_t merged_contacts = 0;        // contacts the algorithms merged into a deeper near-duplicate
     std::uint64_t dropped_contacts = 0;       // contacts the algorithms left out (beyond the manifold's 4)
     std::uint64_t mesh_volume_tests = 0;      // mesh vs mesh: volume pairs the tree walks tested
+    std::uint64_t reused_calls = 0;           // convex calls answered with a ConvexPairCache's last contacts
   };
   Counters counters() const;
   void resetCounters() const;
@@ -144,7 +145,7 @@ class alignas(16) BoxtreeMeshShape : public btConcaveShape {
   btVector3 m_localAabbMin, m_localAabbMax;  // of the scaled mesh
   struct AtomicCounters {
     std::atomic<std::uint64_t> queries{0}, triangles{0}, ray_queries{0}, narrowphase_triangles{0}, merged_contacts{0},
-        dropped_contacts{0}, mesh_volume_tests{0};
+        dropped_contacts{0}, mesh_volume_tests{0}, reused_calls{0};
   };
   mutable AtomicCounters m_counters;
 };

@@ -89,6 +89,12 @@ struct GeomSettings {
   // default: on a resting pile of meshes it cut the volume tests to 0.06x but took 1.2x the
   // collision time (boxtree/collide_front.h). See mesh_pair_cache_info for where the state lives.
   bool mesh_coherence = false;
+  // Convex geoms with temporal coherence (boxtree/collider.h's ConvexPairCache): a pair whose
+  // other geom has no body or a disabled one (auto-disable, dBodyDisable) keeps its last input
+  // and contacts, and gets them again without collision work while neither geom moves (ODE
+  // collides disabled bodies with static geoms every step). The contacts are the same bit for
+  // bit. Pairs with an enabled body never look the state up. See convex_pair_cache_info.
+  bool convex_coherence = true;
 };
 
 bool is_boxtree_geom(dGeomID geom);
@@ -111,6 +117,7 @@ struct CollisionCounters {
   std::uint64_t dropped = 0;                 // contacts left out to fit ODE's array (or its count)
   std::uint64_t convexes_read_from_ode = 0;  // calls with a convex nobody registered (read through ODE)
   std::uint64_t convexes_without_data = 0;   // calls with a convex whose points ODE did not give: no contacts
+  std::uint64_t reused = 0;                  // calls answered with a ConvexPairCache's last contacts
 };
 CollisionCounters geom_counters(dGeomID geom);
 void reset_geom_counters(dGeomID geom);
@@ -133,6 +140,24 @@ struct MeshPairCacheInfo {
 MeshPairCacheInfo mesh_pair_cache_info();
 // Drops every entry (dBoxtreeClose does too).
 void clear_mesh_pair_caches();
+
+// ---- convex coherence state ----
+// GeomSettings::convex_coherence's per-pair state (a ConvexPairCache: the last call's input and
+// contacts, a few hundred bytes; a registered hull's arrays too) lives in a registry like the
+// mesh pairs' above: made on the first call of a pair whose other geom is static or disabled,
+// evicted once unseen for 3 steps (a body that wakes stops looking it up), dropped when either
+// geom is a boxtree geom being destroyed or a convex given to forget_convex. A stale entry is
+// never wrong: it is used only for an input equal to its own bit for bit. At most 16,384 pairs
+// are kept; pairs beyond collide without it. Thread-safe.
+struct ConvexPairCacheInfo {
+  std::size_t pairs = 0;    // entries kept
+  std::size_t bytes = 0;    // their memory (ConvexPairCache::memory_bytes)
+  std::uint64_t steps = 0;  // steps inferred so far
+  std::uint64_t evicted = 0;
+};
+ConvexPairCacheInfo convex_pair_cache_info();
+// Drops every entry (dBoxtreeClose does too).
+void clear_convex_pair_caches();
 
 // ---- convex geoms ----
 // ODE has no getter for a dConvex's data. Register it once per convex geom, in the convex's own
