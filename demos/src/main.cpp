@@ -127,6 +127,7 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
   const TerrainProbe& probe = *scene.probe;
   json samples = json::array();
   int worst_nan = 0, worst_below = 0;
+  std::size_t worst_pair_bytes = 0;
   std::vector<bool> reported(scene.bodies.size(), false);  // bodies already named as below the terrain
   Real lowest = std::numeric_limits<Real>::infinity();
   const long rss_start = resident_kb();
@@ -157,13 +158,16 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
       }
     }
     const long rss = resident_kb();
+    const Simulation::PairState pair_state = sim->pair_state();
+    worst_pair_bytes = std::max(worst_pair_bytes, pair_state.bytes);
     worst_nan = std::max(worst_nan, nan);
     worst_below = std::max(worst_below, below);
     lowest = std::min(lowest, min_clearance);
     std::printf(
         "  step %d: %.0f s, %d non-finite, %d below the terrain, lowest centre %.4f m above it, %d contacts, RSS %ld "
-        "kB\n",
-        step, seconds_since(start), nan, below, min_clearance, sim->contacts(), rss);
+        "kB, pair state %zu pairs %zu bytes\n",
+        step, seconds_since(start), nan, below, min_clearance, sim->contacts(), rss, pair_state.pairs,
+        pair_state.bytes);
     std::fflush(stdout);
     samples.push_back({{"step", step},
                        {"wall_seconds", seconds_since(start)},
@@ -171,7 +175,9 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
                        {"below", below},
                        {"min_clearance", min_clearance},
                        {"contacts", sim->contacts()},
-                       {"rss_kb", rss}});
+                       {"rss_kb", rss},
+                       {"pair_state_pairs", pair_state.pairs},
+                       {"pair_state_bytes", pair_state.bytes}});
   }
   const double wall = seconds_since(start);
   const long rss_middle = samples.empty() ? 0 : samples[samples.size() / 2]["rss_kb"].get<long>();
@@ -195,6 +201,7 @@ int run_soak(const Options& o, const TerrainOptions& terrain_options) {
                            {"rss_kb_start", rss_start},
                            {"rss_kb_middle", rss_middle},
                            {"rss_kb_end", rss_end},
+                           {"max_pair_state_bytes", worst_pair_bytes},
                            {"samples", samples}});
   return worst_nan == 0 && worst_below == 0 ? 0 : 1;
 }

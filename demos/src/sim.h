@@ -61,6 +61,13 @@ class Simulation {
   // Volume pairs tested so far by the boxtree adapters' mesh-vs-mesh tree walks (0 for the
   // built-in midphase).
   virtual std::uint64_t mesh_volume_tests() const { return 0; }
+  // The boxtree adapter's per-pair coherence state kept now, where the adapter can tell (ODE's
+  // registries: convex_pair_cache_info and mesh_pair_cache_info; Bullet keeps it in each pair's
+  // algorithm and reports nothing here).
+  struct PairState {
+    std::size_t pairs = 0, bytes = 0;
+  };
+  virtual PairState pair_state() const { return {}; }
   // Collision time split by the kind of pair, for the benchmarks: one entry per pair kind seen so
   // far ("terrain-box", ..., "body-body"), in a fixed order. ODE: the time of each dCollide call
   // made by the near callback (the hash space's own work is outside all of them). Bullet: the time

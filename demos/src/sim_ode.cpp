@@ -163,6 +163,18 @@ class OdeSimulation final : public Simulation {
 #endif
     return total;
   }
+  PairState pair_state() const override {
+    PairState state;
+#if BOXTREE_DEMO_HAVE_ODE_ADAPTER
+    if (boxtree_) {
+      const boxtree::ode::ConvexPairCacheInfo convex = boxtree::ode::convex_pair_cache_info();
+      const boxtree::ode::MeshPairCacheInfo mesh = boxtree::ode::mesh_pair_cache_info();
+      state.pairs = convex.pairs + mesh.pairs;
+      state.bytes = convex.bytes + mesh.bytes;
+    }
+#endif
+    return state;
+  }
   std::uint64_t mesh_volume_tests() const override {
     std::uint64_t total = 0;
 #if BOXTREE_DEMO_HAVE_ODE_ADAPTER
