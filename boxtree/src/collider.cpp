@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 #include "boxtree/active_edges.h"
@@ -12,6 +13,13 @@
 #include "internal.h"
 
 namespace boxtree {
+namespace detail {
+// The facets run_pipeline visits (ConvexPairCacheAccess::visit_candidates, below).
+// Returns true when they came from the cache's candidate list.
+template <class Query>
+bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
+                      FunctionRef<bool(FacetId)> visit);
+}  // namespace detail
 namespace {
 
 // Steps 1-5 of collider.h for one query volume: `per_facet(a, b, c, options, out)` is the
@@ -20,40 +28,36 @@ namespace {
 // (which is then no candidate).
 template <int Capacity, class Query, class PerFacet>
 void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test, const ContactRequest& request,
-                  const ContactOptions& options, ContactResult& result, PerFacet&& per_facet) {
+                  const ContactOptions& options, ContactResult& result, ConvexPairCache* cache, PerFacet&& per_facet) {
   const TriangleMesh& m = mesh.mesh();
   const std::vector<std::uint8_t>& active = mesh.active_edges();
   const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
   ContactPoint found[Capacity];
-  mesh.tree().query_overlap(
-      query,
-      [&](FacetId facet) {
-        const Vec3& a = m.corner(facet, 0);
-        const Vec3& b = m.corner(facet, 1);
-        const Vec3& c = m.corner(facet, 2);
-        const int n = per_facet(a, b, c, options, found);
-        if (n < 0) return true;
-        ++result.counts.candidates;
-        result.counts.found += std::size_t(n);
-        if (n > 0) {
-          const InternalEdgeCorrection correct_edge(a, b, c,
-                                                    request.internal_edges ? active[facet] : std::uint8_t(0x7));
-          for (int i = 0; i < n; ++i) {
-            found[i].facet = facet;
-            if (request.internal_edges) {
-              const EdgeContact verdict = correct_edge(found[i]);
-              if (verdict == EdgeContact::discard) {
-                ++result.counts.edge_discarded;
-                continue;  // beside this facet: its neighbour reports the real contact
-              }
-              if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
-            }
-            result.contacts.push_back(found[i]);
+  result.counts.listed = detail::visit_candidates(mesh, query, test, cache, [&](FacetId facet) {
+    const Vec3& a = m.corner(facet, 0);
+    const Vec3& b = m.corner(facet, 1);
+    const Vec3& c = m.corner(facet, 2);
+    const int n = per_facet(a, b, c, options, found);
+    if (n < 0) return true;
+    ++result.counts.candidates;
+    result.counts.found += std::size_t(n);
+    if (n > 0) {
+      const InternalEdgeCorrection correct_edge(a, b, c, request.internal_edges ? active[facet] : std::uint8_t(0x7));
+      for (int i = 0; i < n; ++i) {
+        found[i].facet = facet;
+        if (request.internal_edges) {
+          const EdgeContact verdict = correct_edge(found[i]);
+          if (verdict == EdgeContact::discard) {
+            ++result.counts.edge_discarded;
+            continue;  // beside this facet: its neighbour reports the real contact
           }
+          if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
         }
-        return !(request.early_stop && result.contacts.size() >= max_contacts);
-      },
-      nullptr, test);
+        result.contacts.push_back(found[i]);
+      }
+    }
+    return !(request.early_stop && result.contacts.size() >= max_contacts);
+  });
 }
 
 // Step 5.
@@ -149,7 +153,7 @@ int apply_front(const SupportShape& shape, const Vec3& a, const Vec3& b, const V
 }
 
 void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
-                   ContactResult& result) {
+                   ContactResult& result, ConvexPairCache* cache) {
   if (!is_valid(sphere) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -159,7 +163,7 @@ void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const Contac
   // the narrowphase's.
   const Sphere query{sphere.center, sphere.radius + request.margin};
   run_pipeline<kMaxSphereTriangleContacts>(
-      mesh, query, FacetTest::none, request, options, result,
+      mesh, query, FacetTest::none, request, options, result, cache,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         const Vec3 closest = closest_point_on_triangle(query.center, a, b, c);
         if (!((closest - query.center).squaredNorm() <= query.radius * query.radius)) return -1;
@@ -168,7 +172,8 @@ void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const Contac
   reduce(request, result);
 }
 
-void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result) {
+void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result,
+                   ConvexPairCache* cache) {
   if (!is_valid(box) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -177,12 +182,13 @@ void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactReque
   Obb query = box;
   query.half_extents.array() += request.margin;
   const detail::BoxTriangleContacts contacts(box);  // contact_box_triangle, the box's polytope built once
-  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, contacts);
+  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, cache,
+                                        contacts);
   reduce(request, result);
 }
 
 void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
-                   ContactResult& result) {
+                   ContactResult& result, ConvexPairCache* cache) {
   if (!is_valid(capsule) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -190,14 +196,15 @@ void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const Cont
   const ContactOptions options = options_for(mesh, request, result);
   run_pipeline<kMaxCapsuleTriangleContacts>(
       mesh, Capsule{capsule.p0, capsule.p1, capsule.radius + request.margin}, FacetTest::exact_triangle, request,
-      options, result, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+      options, result, cache,
+      [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         return contact_capsule_triangle(capsule, a, b, c, o, out);
       });
   reduce(request, result);
 }
 
 void collide_shape(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
-                   ContactResult& result) {
+                   ContactResult& result, ConvexPairCache* cache) {
   if (!cylinder.p0.allFinite() || !cylinder.p1.allFinite() || !(cylinder.radius >= 0) ||
       !std::isfinite(cylinder.radius) || !valid_request(request)) {
     result.counts.invalid_input = true;
@@ -207,13 +214,13 @@ void collide_shape(const CollisionMesh& mesh, const Cylinder& cylinder, const Co
   const Obb query = segment_box(cylinder.p0, cylinder.p1, cylinder.radius + request.margin, request.margin);
   // contact_cylinder_triangle, the cylinder's axis and support set up once
   const detail::CylinderTriangleContacts contacts(cylinder.p0, cylinder.p1, cylinder.radius);
-  run_pipeline<kMaxCylinderTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
+  run_pipeline<kMaxCylinderTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, cache,
                                              contacts);
   reduce(request, result);
 }
 
 void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
-                   ContactResult& result) {
+                   ContactResult& result, ConvexPairCache* cache) {
   if (!finite(hull.mesh_from_local) || !(hull.rounding >= 0) || !std::isfinite(hull.rounding) ||
       !valid_request(request) || hull.local.vertices.empty()) {
     result.counts.invalid_input = true;
@@ -230,7 +237,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, cons
   // within the margin of the hull meets its box grown by the margin.
   const Obb query = placed_box(hull.local.vertices, hull.mesh_from_local, hull.rounding + request.margin);
   run_pipeline<kMaxPolyhedronTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result,
+      mesh, query, FacetTest::exact_triangle, request, options, result, cache,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         const int n = contact_polyhedron_triangle(placed, a, b, c, o, out);
         for (int i = 0; i < n; ++i) out[i].depth += hull.rounding;
@@ -240,7 +247,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, cons
 }
 
 void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
-                   ContactResult& result) {
+                   ContactResult& result, ConvexPairCache* cache) {
   if (!finite(hull.mesh_from_local) || !valid_request(request) || hull.local.empty()) {
     result.counts.invalid_input = true;
     return;
@@ -262,7 +269,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const Co
   const ConvexSupport shape{support, centroid, true};
   run_pipeline<kMaxConvexTriangleContacts>(
       mesh, placed_box(hull.local, hull.mesh_from_local, request.margin), FacetTest::exact_triangle, request, options,
-      result, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+      result, cache, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         return contact_convex_triangle(shape, a, b, c, o, out);
       });
   reduce(request, result);
@@ -394,56 +401,163 @@ struct ConvexPairCacheAccess {
   }
   void add_hull(const PlacedPoints& placed) { append_array(hull, placed.local); }
 
-  // The call: the cache's contacts when its last input equals this one, else `collide` and the
-  // input and contacts kept.
+  // Where the shape lies, cheaply (equal inputs give equal boxes): only a call whose box is the
+  // last call's builds and keeps its input.
+  static Aabb shape_box(const Sphere& s, Real margin) {
+    const Vec3 r = Vec3::Constant(s.radius + margin);
+    return {s.center - r, s.center + r};
+  }
+  static Aabb shape_box(const Obb& box, Real margin) {
+    const Vec3 r = box.axes.cwiseAbs() * (box.half_extents.array() + margin).matrix();
+    return {box.center - r, box.center + r};
+  }
+  static Aabb segment_shape_box(const Vec3& p0, const Vec3& p1, Real radius) {
+    const Vec3 r = Vec3::Constant(radius);
+    return {p0.cwiseMin(p1) - r, p0.cwiseMax(p1) + r};
+  }
+  static Aabb shape_box(const Capsule& c, Real margin) { return segment_shape_box(c.p0, c.p1, c.radius + margin); }
+  static Aabb shape_box(const Cylinder& c, Real margin) { return segment_shape_box(c.p0, c.p1, c.radius + margin); }
+  static Aabb placement_box(const RigidTransform& place) {
+    return Aabb::from_points(place.translation, place.translation + place.rotation * Vec3(1, 2, 3));
+  }
+  static Aabb shape_box(const PlacedPolyhedron& hull, Real) { return placement_box(hull.mesh_from_local); }
+  static Aabb shape_box(const PlacedPoints& hull, Real) { return placement_box(hull.mesh_from_local); }
+
+  static bool same_bits(const Aabb& x, const Aabb& y) {
+    return std::memcmp(x.min.data(), y.min.data(), 3 * sizeof(Real)) == 0 &&
+           std::memcmp(x.max.data(), y.max.data(), 3 * sizeof(Real)) == 0;
+  }
+
+  // The call: the cache's contacts when its last input equals this one, else collide_shape (with
+  // the cache's candidate list) and, when the shape lies where it did, the input and contacts kept.
   template <class Shape>
   static void collide(ConvexPairCache* cache, const CollisionMesh& mesh, const Shape& shape,
                       const ContactRequest& request, ContactResult& result) {
-    if (!cache) return collide_shape(mesh, shape, request, result);
+    if (!cache) return collide_shape(mesh, shape, request, result, nullptr);
     result.clear();
-    ConvexPairCacheAccess input = scratch();
-    input.add_shape(shape);
-    input.add_request(mesh, request);
     ConvexPairCache& c = *cache;
-    const bool same_placement = c.placed_ && c.placement_ == input.placement;
-    if (same_placement) input.add_hull(shape);
-    const bool same_hull = same_placement && c.hull_copied_ && c.hull_ == input.hull;
-    if (same_hull) {
-      result.contacts.assign(c.contacts_.begin(), c.contacts_.end());
-      result.counts.reused = true;
-      result.counts.two_sided_fallback = c.two_sided_fallback_;
-      return;
+    if (c.tree_.identity() != mesh.tree().identity()) {
+      c.clear();
+      c.tree_ = mesh.tree();
     }
-    collide_shape(mesh, shape, request, result);
+    const Aabb box = shape_box(shape, request.margin);
+    const bool still = !c.shape_box_.is_empty() && same_bits(box, c.shape_box_);
+    c.shape_box_ = box;
+    ConvexPairCacheAccess input = scratch();
+    bool same_placement = false;
+    if (still) {
+      input.add_shape(shape);
+      input.add_request(mesh, request);
+      same_placement = c.placed_ && c.placement_ == input.placement;
+      if (same_placement) input.add_hull(shape);
+      if (same_placement && c.hull_copied_ && c.hull_ == input.hull) {
+        result.contacts.assign(c.contacts_.begin(), c.contacts_.end());
+        result.counts.reused = true;
+        result.counts.two_sided_fallback = c.two_sided_fallback_;
+        return;
+      }
+    }
+    collide_shape(mesh, shape, request, result, &c);
     if (result.counts.invalid_input) {
       c.clear();
       return;
     }
-    if (c.tree_.identity() != mesh.tree().identity()) c.tree_ = mesh.tree();
+    c.placed_ = still;
+    if (!still) return;
     c.placement_.swap(input.placement);
-    c.placed_ = true;
     // A hull's arrays are copied when its placement is the last call's: a body at rest.
     c.hull_copied_ = same_placement || !kHasHull<Shape>;
     c.hull_.swap(input.hull);
     c.contacts_.assign(result.contacts.begin(), result.contacts.end());
     c.two_sided_fallback_ = result.counts.two_sided_fallback;
   }
+
+  // The facets of `query` for run_pipeline: the tree walk's, or the cache's candidate list's (see
+  // ConvexPairCache), the same facets in the same order, each passed through the same leaf test.
+  static Aabb query_box(const Sphere& s) {
+    const Vec3 r = Vec3::Constant(s.radius);
+    return {s.center - r, s.center + r};
+  }
+  static Aabb query_box(const Obb& box) { return shape_box(box, 0); }
+  static Aabb query_box(const Capsule& c) { return segment_shape_box(c.p0, c.p1, c.radius); }
+
+  template <class Query>
+  static bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
+                               FunctionRef<bool(FacetId)> visit) {
+    const AnyTree& tree = mesh.tree();
+    if (!cache || !tree.packed() || test == FacetTest::leaf_volume || !is_valid(query)) {
+      tree.query_overlap(query, visit, nullptr, test);
+      return false;
+    }
+    ConvexPairCache& c = *cache;  // c.tree_ is the mesh's tree (collide)
+    const Aabb box = query_box(query);
+    const Real size = box.extent().norm();
+    const Real tolerance = Real(1e-9) * (size + box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).maxCoeff());
+    if (!(size > 0) || !std::isfinite(size + tolerance)) {
+      tree.query_overlap(query, visit, nullptr, test);
+      return false;
+    }
+    if (c.reach_.is_empty() || !contains(c.reach_, box, -tolerance)) {
+      const Vec3 moved = (box.min - c.last_query_.min).cwiseAbs().cwiseMax((box.max - c.last_query_.max).cwiseAbs());
+      const bool slow = !c.last_query_.is_empty() && moved.maxCoeff() <= size / 64;
+      c.last_query_ = box;
+      c.reach_ = Aabb::empty();
+      if (!slow) {
+        tree.query_overlap(query, visit, nullptr, test);
+        return false;
+      }
+      c.reach_ = {box.min - Vec3::Constant(size / 16), box.max + Vec3::Constant(size / 16)};
+      c.candidates_.clear();
+      tree.query_overlap(
+          c.reach_,
+          [&](FacetId f) {
+            c.candidates_.push_back(f);
+            return true;
+          },
+          nullptr, FacetTest::exact_triangle);
+    }
+    c.last_query_ = box;
+    const TriangleMesh& m = mesh.mesh();
+    const auto exact = [&] {
+      if constexpr (std::is_same_v<Query, Obb>) {
+        return ObbTriangleTest(query);
+      } else {
+        return [&](const Vec3& a, const Vec3& b, const Vec3& c2) { return triangle_overlaps(a, b, c2, query); };
+      }
+    }();
+    for (const FacetId f : c.candidates_) {
+      if (test == FacetTest::exact_triangle && !exact(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2))) continue;
+      if (!visit(f)) break;
+    }
+    return true;
+  }
 };
+
+template <class Query>
+bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
+                      FunctionRef<bool(FacetId)> visit) {
+  return ConvexPairCacheAccess::visit_candidates(mesh, query, test, cache, visit);
+}
 
 }  // namespace detail
 
 void ConvexPairCache::clear() {
   tree_ = {};
+  shape_box_ = Aabb::empty();
   placement_.clear();
   hull_.clear();
   placed_ = false;
   hull_copied_ = false;
   contacts_.clear();
   two_sided_fallback_ = false;
+  last_query_ = Aabb::empty();
+  reach_ = Aabb::empty();
+  candidates_.clear();
 }
 
 std::size_t ConvexPairCache::memory_bytes() const {
-  return placement_.capacity() + hull_.capacity() + contacts_.capacity() * sizeof(ContactPoint);
+  return placement_.capacity() + hull_.capacity() + contacts_.capacity() * sizeof(ContactPoint) +
+         candidates_.capacity() * sizeof(FacetId);
 }
 
 void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
@@ -502,7 +616,7 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const 
   query.half_extents.array() += request.margin;
   const ConvexSupport convex{shape.support, shape.center, shape.polytope};
   run_pipeline<kMaxConvexTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result,
+      mesh, query, FacetTest::exact_triangle, request, options, result, nullptr,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
         return contact_convex_triangle(convex, a, b, c, o, out);
@@ -522,7 +636,7 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
   Obb query = shape.bounds;
   query.half_extents.array() += request.margin;
   run_pipeline<kMaxEngineTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result,
+      mesh, query, FacetTest::exact_triangle, request, options, result, nullptr,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
         const int n = within_margin(

@@ -132,7 +132,7 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
     thread_local ContactResult contacts;
     contacts.clear();
     ConvexPairCache* cache = nullptr;
-    if (m_settings->convexCoherence && still(convex_wrap) && still(mesh_wrap)) {
+    if (m_settings->convexCoherence) {
       if (!m_cache) m_cache = std::make_unique<ConvexPairCache>();
       cache = m_cache.get();
     }
@@ -163,12 +163,6 @@ class ConvexMeshAlgorithm : public btActivatingCollisionAlgorithm {
   };
 
  private:
-  // An object that does not move by itself: static, kinematic or deactivated.
-  static bool still(const btCollisionObjectWrapper* wrap) {
-    const btCollisionObject* object = wrap->getCollisionObject();
-    return object->isStaticOrKinematicObject() || !object->isActive();
-  }
-
   // The shape in the mesh's (scaled) frame and the collider call for it: spheres, boxes and
   // capsules analytic; hulls with Bullet's faces (AlgorithmSettings::hullFaces) by exact separating
   // axes with the hull's margin as rounding; every other convex shape by its support mapping with

@@ -44,12 +44,12 @@ struct AlgorithmSettings {
   // resting pile of meshes it cut the volume tests to 0.37x but took 1.8x the collision time
   // (boxtree/collide_front.h).
   bool meshCoherence = false;
-  // Convex vs mesh with temporal coherence (boxtree/collider.h's ConvexPairCache): a pair in which
-  // neither object moves by itself (static, kinematic or deactivated: a sleeping body against an
-  // awake one, a kinematic body held still) keeps its last input and contacts in its algorithm
-  // (freed with the pair) and gets them again without collision work while neither moves. The
-  // contacts are the same bit for bit. Pairs with an active dynamic body never use it. Shapes
-  // that go through Bullet's GJK (support mappings) collide afresh.
+  // Convex vs mesh with temporal coherence (boxtree/collider.h's ConvexPairCache, in each pair's
+  // algorithm, freed with the pair): a pair whose input repeats bit for bit (a kinematic body held
+  // still against a static mesh, a sleeping body against an awake kinematic one) gets its last
+  // contacts again without collision work, and a slow body takes its candidate facets from a list
+  // made for a slightly larger box while it stays inside it. The contacts are the same bit for
+  // bit. Shapes that go through Bullet's GJK (support mappings) collide afresh.
   bool convexCoherence = true;
 };
 
