@@ -636,6 +636,67 @@ bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, cons
   return segment_triangle_distance_squared_until(capsule.p0, capsule.p1, a, b, c, r2) <= r2;
 }
 
+namespace {
+
+// The five candidates of closest_segment_triangle_boundary, in its order, with the distances that
+// segment_triangle_distance_squared_until takes (the same expressions up to the sign of the
+// difference, which squaring drops).
+void boundary_candidates(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b, const Vec3& c,
+                         detail::SegmentTrianglePair (&out)[5]) {
+  for (int k = 0; k < 2; ++k) {
+    const Vec3& p = k == 0 ? p0 : p1;
+    const Vec3 q = closest_point_on_triangle(p, a, b, c);
+    out[k] = {p, q, (p - q).squaredNorm()};
+  }
+  const Vec3* corner[3] = {&a, &b, &c};
+  for (int i = 0; i < 3; ++i) {
+    Vec3 x, y;
+    closest_points_on_segments(p0, p1, *corner[i], *corner[(i + 1) % 3], x, y);
+    out[2 + i] = {x, y, (x - y).squaredNorm()};
+  }
+}
+
+detail::SegmentTrianglePair first_closest(const detail::SegmentTrianglePair (&candidates)[5]) {
+  detail::SegmentTrianglePair best;
+  for (const detail::SegmentTrianglePair& candidate : candidates)
+    if (candidate.distance_squared < best.distance_squared) best = candidate;
+  return best;
+}
+
+}  // namespace
+
+detail::SegmentTrianglePair detail::closest_segment_triangle_boundary(const Vec3& p0, const Vec3& p1, const Vec3& a,
+                                                                      const Vec3& b, const Vec3& c) {
+  SegmentTrianglePair candidates[5];
+  boundary_candidates(p0, p1, a, b, c, candidates);
+  return first_closest(candidates);
+}
+
+bool detail::triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
+                                       SegmentTrianglePair& boundary) {
+  if (capsule_beyond_a_triangle_plane(a, b, c, capsule)) return false;
+  // segment_triangle_distance_squared_until's distance is 0 (<= r^2 for a valid radius) when the
+  // segment meets the triangle, else the running std::min of the five candidates' distances.
+  // That minimum is NaN from the first distance on or never grows, so its early stops at a value
+  // <= r^2 decide as the whole minimum does.
+  bool meets = false;
+  if (is_flat(a, b, c)) {
+    const auto [s, e] = degenerate_extent(a, b, c);
+    meets = segments_meet(capsule.p0, capsule.p1, s, e);
+  } else {
+    meets = segment_meets_triangle(capsule.p0, capsule.p1, a, b, c);
+  }
+  SegmentTrianglePair candidates[5];
+  boundary_candidates(capsule.p0, capsule.p1, a, b, c, candidates);
+  if (!meets) {
+    Real best = candidates[0].distance_squared;
+    for (int k = 1; k < 5; ++k) best = std::min(best, candidates[k].distance_squared);
+    if (!(best <= capsule.radius * capsule.radius)) return false;
+  }
+  boundary = first_closest(candidates);
+  return true;
+}
+
 bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane) {
   const Real da = plane.signed_distance_scaled(a);
   const Real db = plane.signed_distance_scaled(b);
