@@ -295,6 +295,122 @@ TEST(Collider, SphereCandidatesAndContactsAreThePerFacetRoutinesBitForBit) {
   EXPECT_GT(beyond_radius, std::size_t(test::scaled(20)));
 }
 
+// The capsule collider makes triangle_overlaps_capsule's test itself and hands the closest pairs
+// it computes to the narrowphase: its candidates are exactly the facets triangle_overlaps_capsule
+// gives for the capsule grown by the margin, its counts those of contact_capsule_triangle and the
+// edge rule on them, and its contacts theirs bit for bit (compared where no two share a position,
+// as for spheres above). Capsules lie along their facet in part of the trials (the face contacts
+// at both ends), pierce it in others, and are points in a few. A third mesh adds facets with
+// collinear corners, a repeated corner or a needle's width among a triangle soup (the leaf test's
+// flat branch).
+TEST(Collider, CapsuleCandidatesAndContactsAreThePerFacetRoutinesBitForBit) {
+  Random random(44);
+  constexpr int kSoup = 300;
+  auto soup = std::make_shared<TriangleMesh>(make_triangle_soup(kSoup, 9, 4, 1.5));
+  for (int i = 0; i < 150; ++i) {
+    const Vec3 a = random.point(-4, 4);
+    const Vec3 d = random.point(-1, 1);
+    const Vec3 off = random.unit_vector();
+    const Vec3 b = i % 3 == 1 ? a : Vec3(a + d);
+    const Vec3 c = i % 3 == 0 ? Vec3(a + 2.5 * d) : i % 3 == 1 ? Vec3(a + d) : Vec3(a + d + 1e-9 * off);
+    const VertexId base = VertexId(soup->vertices.size());
+    soup->vertices.insert(soup->vertices.end(), {a, b, c});
+    soup->triangles.push_back({base, base + 1, base + 2});
+  }
+  std::vector<Scene> meshes = scenes();
+  meshes.push_back({"degenerate_soup", CollisionMesh::build(soup, parse_method("aabb")), 0.5});
+  std::size_t compared = 0, beyond_radius = 0, pierced = 0, degenerate = 0;
+  for (const Scene& scene : meshes) {
+    const CollisionMesh& mesh = *scene.mesh;
+    const TriangleMesh& m = mesh.mesh();
+    for (int trial = 0; trial < test::scaled(300); ++trial) {
+      const FacetId f0 = FacetId(random.integer(0, int(m.facet_count()) - 1));
+      Real u = random.uniform(0, 1);
+      Real v = random.uniform(0, 1);
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      const Vec3 n = (m.corner(f0, 1) - m.corner(f0, 0)).cross(m.corner(f0, 2) - m.corner(f0, 0)).normalized();
+      const Real s = scene.size * random.uniform(0.3, 1.0);
+      const Real lift = random.uniform(-s, s);
+      const Vec3 center = m.corner(f0, 0) + u * (m.corner(f0, 1) - m.corner(f0, 0)) +
+                          v * (m.corner(f0, 2) - m.corner(f0, 0)) + n * lift;
+      Vec3 axis = random.unit_vector();
+      if (random.chance(0.4)) axis = (axis - n.dot(axis) * n).normalized();  // along the facet
+      const Real half = random.chance(0.1) ? 0 : s * random.uniform(0.2, 1.5);
+      const Capsule capsule{center - half * axis, center + half * axis, 0.5 * s * random.uniform(0.3, 1.0)};
+      ContactRequest request;
+      request.two_sided = random.chance(0.5);
+      request.margin = random.chance(0.5) ? 0.2 * s : 0;
+      request.internal_edges = random.chance(0.7);
+      request.max_contacts = kAll;
+      request.merge_distance = 0;
+      ContactResult result;
+      collide_convex(mesh, capsule, request, result);
+
+      ContactOptions options;
+      options.margin = request.margin;
+      options.two_sided = request.two_sided || !mesh.consistent_winding();
+      const Capsule grown{capsule.p0, capsule.p1, capsule.radius + request.margin};
+      CollisionCounts want;
+      std::vector<ContactPoint> contacts;
+      for (FacetId f = 0; f < m.facet_count(); ++f) {
+        const Vec3 &a = m.corner(f, 0), &b = m.corner(f, 1), &c = m.corner(f, 2);
+        if (!triangle_overlaps_capsule(a, b, c, grown)) continue;
+        ++want.candidates;
+        beyond_radius += !triangle_overlaps_capsule(a, b, c, capsule);
+        pierced += segment_triangle_distance_squared(capsule.p0, capsule.p1, a, b, c) == 0;
+        degenerate += scene.name == "degenerate_soup" && f >= FacetId(kSoup);
+        ContactPoint out[kMaxCapsuleTriangleContacts];
+        const int k = contact_capsule_triangle(capsule, a, b, c, options, out);
+        want.found += std::size_t(k);
+        for (int i = 0; i < k; ++i) {
+          out[i].facet = f;
+          if (request.internal_edges) {
+            const EdgeContact verdict = correct_internal_edge_contact(out[i], a, b, c, mesh.active_edges()[f]);
+            if (verdict == EdgeContact::discard) {
+              ++want.edge_discarded;
+              continue;
+            }
+            if (verdict == EdgeContact::corrected) ++want.edge_corrected;
+          }
+          contacts.push_back(out[i]);
+        }
+      }
+      SCOPED_TRACE(testing::Message() << scene.name << " trial " << trial << " two_sided " << request.two_sided
+                                      << " margin " << request.margin << " edges " << request.internal_edges);
+      EXPECT_EQ(result.counts.candidates, want.candidates);
+      EXPECT_EQ(result.counts.found, want.found);
+      EXPECT_EQ(result.counts.edge_corrected, want.edge_corrected);
+      EXPECT_EQ(result.counts.edge_discarded, want.edge_discarded);
+      const auto by_place = [](const ContactPoint& x, const ContactPoint& y) {
+        return std::make_tuple(x.position.x(), x.position.y(), x.position.z(), x.depth) <
+               std::make_tuple(y.position.x(), y.position.y(), y.position.z(), y.depth);
+      };
+      std::sort(contacts.begin(), contacts.end(), by_place);
+      const bool shared_place = std::adjacent_find(contacts.begin(), contacts.end(), [](const auto& x, const auto& y) {
+                                  return x.position == y.position;
+                                }) != contacts.end();
+      if (shared_place) continue;
+      std::vector<ContactPoint> got = result.contacts;
+      std::sort(got.begin(), got.end(), by_place);
+      ASSERT_EQ(got.size(), contacts.size());
+      for (std::size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].position, contacts[i].position);
+        EXPECT_EQ(got[i].normal, contacts[i].normal);
+        EXPECT_EQ(got[i].depth, contacts[i].depth);
+        EXPECT_EQ(got[i].facet, contacts[i].facet);
+        ++compared;
+      }
+    }
+  }
+  // The scenes do make contacts, candidates only the margin reaches, cores through facets and
+  // candidates among the degenerate facets (the counts scale with the trials: a third of them under
+  // the sanitizers, BOXTREE_TEST_SCALE).
+  EXPECT_GT(compared, std::size_t(test::scaled(1000)));
+  EXPECT_GT(beyond_radius, std::size_t(test::scaled(300)));
+  EXPECT_GT(pierced, std::size_t(test::scaled(100)));
+  EXPECT_GT(degenerate, std::size_t(test::scaled(30)));
+}
+
 // An engine's own narrowphase (here the core's box routine, two-sided as the collider asks):
 // on one-sided facets no contact ever pushes the shape out through a facet's back, and where the
 // engine's normal is already in front the contacts are the engine's.

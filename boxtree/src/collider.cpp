@@ -194,11 +194,15 @@ void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const Cont
     return;
   }
   const ContactOptions options = options_for(mesh, request, result);
+  // The exact test is triangle_overlaps_capsule's on the grown capsule (valid: the walk reaches no
+  // facet otherwise), and the closest pairs it computes are the narrowphase's.
+  const Capsule query{capsule.p0, capsule.p1, capsule.radius + request.margin};
   run_pipeline<kMaxCapsuleTriangleContacts>(
-      mesh, Capsule{capsule.p0, capsule.p1, capsule.radius + request.margin}, FacetTest::exact_triangle, request,
-      options, result, cache,
+      mesh, query, FacetTest::none, request, options, result, cache,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
-        return contact_capsule_triangle(capsule, a, b, c, o, out);
+        detail::SegmentTrianglePair boundary;
+        if (!detail::triangle_overlaps_capsule(a, b, c, query, boundary)) return -1;
+        return detail::contact_capsule_triangle_from(capsule, a, b, c, boundary, o, out);
       });
   reduce(request, result);
 }

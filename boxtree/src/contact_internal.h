@@ -105,6 +105,13 @@ inline Vec3 perpendicular_to(const Vec3& d) {
 int contact_sphere_triangle_from(const Sphere& sphere, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& closest,
                                  const ContactOptions& options, ContactPoint* out);
 
+// contact_capsule_triangle given `boundary`, which must be closest_segment_triangle_boundary(
+// capsule.p0, capsule.p1, a, b, c) (internal.h; for callers that have it already): the same
+// contacts.
+int contact_capsule_triangle_from(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
+                                  const SegmentTrianglePair& boundary, const ContactOptions& options,
+                                  ContactPoint* out);
+
 // Inward normals of the triangle's side walls (the prism over it along its normal):
 // wall(i) . (x - v[i]) >= 0 for points over the triangle.
 inline Vec3 inward_wall(const TriangleFrame& tri, int i) { return tri.normal.cross(tri.v[(i + 1) % 3] - tri.v[i]); }

@@ -19,41 +19,30 @@ using namespace detail;  // the narrowphase's helpers (contact_internal.h)
 
 namespace {
 
-// Closest pair of the segment [p0,p1] and the triangle. The pair has a segment end on one side or
-// a triangle edge on the other unless the segment crosses the triangle, so the candidates are the
-// two ends, the three edges and the crossing point of the plane.
-struct SegmentTrianglePair {
-  Vec3 on_segment = Vec3::Zero();
-  Vec3 on_triangle = Vec3::Zero();
-  Real distance_squared = kInf;
-};
-
-SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, const TriangleFrame& tri) {
+// Closest pair of the segment [p0,p1] and the triangle, given `boundary` =
+// closest_segment_triangle_boundary of the same segment and triangle (internal.h). The pair has a
+// segment end on one side or a triangle edge on the other unless the segment crosses the triangle,
+// so the candidates are the crossing point of the plane, then the boundary's (the first of equally
+// close ones).
+SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, const TriangleFrame& tri,
+                                             const SegmentTrianglePair& boundary) {
   SegmentTrianglePair best;
-  const auto consider = [&](const Vec3& x, const Vec3& y) {
-    const Real d2 = (x - y).squaredNorm();
-    if (d2 < best.distance_squared) best = {x, y, d2};
-  };
-  const Vec3& a = tri.v[0];
-  const Vec3& b = tri.v[1];
-  const Vec3& c = tri.v[2];
   if (!tri.degenerate) {
     const Real s0 = tri.signed_distance(p0);
     const Real s1 = tri.signed_distance(p1);
     if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
       const Vec3 x = p0 + (s0 / (s0 - s1)) * (p1 - p0);
-      consider(x, closest_point_on_triangle(x, a, b, c));
+      const Vec3 y = closest_point_on_triangle(x, tri.v[0], tri.v[1], tri.v[2]);
+      const Real d2 = (x - y).squaredNorm();
+      if (d2 < best.distance_squared) best = {x, y, d2};
     }
   }
-  consider(p0, closest_point_on_triangle(p0, a, b, c));
-  consider(p1, closest_point_on_triangle(p1, a, b, c));
-  for (int i = 0; i < 3; ++i) {
-    Vec3 x;
-    Vec3 y;
-    closest_points_on_segments(p0, p1, tri.v[i], tri.v[(i + 1) % 3], x, y);
-    consider(x, y);
-  }
+  if (boundary.distance_squared < best.distance_squared) best = boundary;
   return best;
+}
+
+SegmentTrianglePair closest_segment_triangle(const Vec3& p0, const Vec3& p1, const TriangleFrame& tri) {
+  return closest_segment_triangle(p0, p1, tri, closest_segment_triangle_boundary(p0, p1, tri.v[0], tri.v[1], tri.v[2]));
 }
 
 // The parameter range [t0, t1] of the segment p0 + t*(p1-p0), t in [0,1], over the triangle
@@ -120,6 +109,13 @@ int detail::contact_sphere_triangle_from(const Sphere& sphere, const Vec3& a, co
 
 int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
                              const ContactOptions& options, ContactPoint* out) {
+  return detail::contact_capsule_triangle_from(
+      capsule, a, b, c, closest_segment_triangle_boundary(capsule.p0, capsule.p1, a, b, c), options, out);
+}
+
+int detail::contact_capsule_triangle_from(const Capsule& capsule, const Vec3& a, const Vec3& b, const Vec3& c,
+                                          const SegmentTrianglePair& boundary, const ContactOptions& options,
+                                          ContactPoint* out) {
   if (!finite(a, b, c) || !finite(capsule.p0, capsule.p1, Vec3::Constant(capsule.radius))) return 0;
   const TriangleFrame tri(a, b, c);
   const Real r = capsule.radius;
@@ -131,7 +127,7 @@ int contact_capsule_triangle(const Capsule& capsule, const Vec3& a, const Vec3& 
   const Real coord = std::max({tri.coord, max_abs(p0), max_abs(p1)});
   const Real tiny = tolerance(size, coord);
 
-  const SegmentTrianglePair pair = closest_segment_triangle(p0, p1, tri);
+  const SegmentTrianglePair pair = closest_segment_triangle(p0, p1, tri, boundary);
   const Real distance = std::sqrt(pair.distance_squared);
   if (!(distance <= r + margin)) return 0;
 

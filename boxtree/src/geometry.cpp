@@ -636,6 +636,76 @@ bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, cons
   return segment_triangle_distance_squared_until(capsule.p0, capsule.p1, a, b, c, r2) <= r2;
 }
 
+namespace {
+
+// The five candidates of closest_segment_triangle_boundary, in its order (p0 and q[0], p1 and
+// q[1], then x[i] and y[i] for the edges), with the distances that
+// segment_triangle_distance_squared_until takes (the same expressions up to the sign of the
+// difference, which squaring drops).
+struct BoundaryCandidates {
+  Vec3 q[2], x[3], y[3];
+  Real distance_squared[5];
+
+  [[gnu::always_inline]] BoundaryCandidates(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
+                                            const Vec3& c) {
+    q[0] = closest_point_on_triangle(p0, a, b, c);
+    q[1] = closest_point_on_triangle(p1, a, b, c);
+    closest_points_on_segments(p0, p1, a, b, x[0], y[0]);
+    closest_points_on_segments(p0, p1, b, c, x[1], y[1]);
+    closest_points_on_segments(p0, p1, c, a, x[2], y[2]);
+    distance_squared[0] = (p0 - q[0]).squaredNorm();
+    distance_squared[1] = (p1 - q[1]).squaredNorm();
+    for (int i = 0; i < 3; ++i) distance_squared[2 + i] = (x[i] - y[i]).squaredNorm();
+  }
+
+  // The first of the closest (a default pair if no distance is below infinity).
+  [[gnu::always_inline]] detail::SegmentTrianglePair first_closest(const Vec3& p0, const Vec3& p1) const {
+    detail::SegmentTrianglePair best;
+    int k = -1;
+    for (int i = 0; i < 5; ++i) {
+      if (distance_squared[i] < best.distance_squared) {
+        best.distance_squared = distance_squared[i];
+        k = i;
+      }
+    }
+    if (k >= 0) {
+      best.on_segment = k == 0 ? p0 : k == 1 ? p1 : x[k - 2];
+      best.on_triangle = k < 2 ? q[k] : y[k - 2];
+    }
+    return best;
+  }
+};
+
+}  // namespace
+
+detail::SegmentTrianglePair detail::closest_segment_triangle_boundary(const Vec3& p0, const Vec3& p1, const Vec3& a,
+                                                                      const Vec3& b, const Vec3& c) {
+  return BoundaryCandidates(p0, p1, a, b, c).first_closest(p0, p1);
+}
+
+bool detail::triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
+                                       SegmentTrianglePair& boundary) {
+  if (capsule_beyond_a_triangle_plane(a, b, c, capsule)) return false;
+  // segment_triangle_distance_squared_until's distance is 0 (<= r^2 for a valid radius) when the
+  // segment meets the triangle, else the running std::min of the five candidates' distances.
+  // That minimum is NaN from the first distance on or never grows, so its early stops at a value
+  // <= r^2 decide as the whole minimum does; and the decision (meets, or the minimum <= r^2) is
+  // the same in either order, so the meeting test is made only for what the distances reject.
+  const BoundaryCandidates candidates(capsule.p0, capsule.p1, a, b, c);
+  Real least = candidates.distance_squared[0];
+  for (int i = 1; i < 5; ++i) least = std::min(least, candidates.distance_squared[i]);
+  if (!(least <= capsule.radius * capsule.radius)) {
+    if (is_flat(a, b, c)) {
+      const auto [s, e] = degenerate_extent(a, b, c);
+      if (!segments_meet(capsule.p0, capsule.p1, s, e)) return false;
+    } else if (!segment_meets_triangle(capsule.p0, capsule.p1, a, b, c)) {
+      return false;
+    }
+  }
+  boundary = candidates.first_closest(capsule.p0, capsule.p1);
+  return true;
+}
+
 bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Plane& plane) {
   const Real da = plane.signed_distance_scaled(a);
   const Real db = plane.signed_distance_scaled(b);

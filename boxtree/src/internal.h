@@ -2,10 +2,12 @@
 #pragma once
 // Helpers shared by several source files of the library; not part of the public API.
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
 #include "boxtree/mesh.h"
+#include "boxtree/shapes.h"
 #include "boxtree/volume/aabb.h"
 #include "boxtree/volume/obb.h"
 #include "exact_sign.h"
@@ -38,6 +40,28 @@ class ObbTriangleTest {
   Aabb local_;
   bool valid_;
 };
+
+// A pair of points, one on a segment and one on a triangle, and their squared distance.
+struct SegmentTrianglePair {
+  Vec3 on_segment = Vec3::Zero();
+  Vec3 on_triangle = Vec3::Zero();
+  Real distance_squared = std::numeric_limits<Real>::infinity();
+};
+
+// The closest of the pairs with an end of the segment [p0, p1] or an edge of the triangle on their
+// side: p0 and p1 with their closest points on the triangle, then the segment's closest points
+// (closest_points_on_segments) to the edges ab, bc and ca. The first of equally close ones in that
+// order; a default pair if no distance is below infinity. The closest pair of the segment and the
+// triangle is this one unless the segment crosses the triangle's interior. Defined in geometry.cpp.
+SegmentTrianglePair closest_segment_triangle_boundary(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
+                                                      const Vec3& c);
+
+// triangle_overlaps_capsule for a valid capsule (is_valid; not checked): the same decision for
+// every input, bit for bit. When true, `boundary` is closest_segment_triangle_boundary(capsule.p0,
+// capsule.p1, a, b, c), computed on the way: a collider's leaf test hands it to the narrowphase
+// (contact_capsule_triangle_from). Defined in geometry.cpp.
+bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
+                               SegmentTrianglePair& boundary);
 
 // One triangle of triangles_intersect as that test uses it, prepared once for the pairs that
 // share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box and
