@@ -77,6 +77,9 @@ int main(int argc, char** argv) {
     demo::SimOptions boxtree_options = builtin_options;
     boxtree_options.boxtree_midphase = true;
     boxtree_options.method = method;
+    // Every replay collides the same poses again: with convex coherence the adapter would answer
+    // them from its pair state (SimOptions::convex_coherence) instead of colliding.
+    boxtree_options.convex_coherence = false;
     std::vector<demo::Pose> poses;
     {
       // Settled by the built-in world, so that the poses do not depend on the boxtree code under
