@@ -383,17 +383,17 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
     const int j = kAfterNext[k];
     for (int t = 0; t < 3; ++t) {
       const Vec3& e = local_edges[t];
-      // u = e_k x e: component k is zero, (i, j) are (-e_j, e_i).
-      Vec3 u = Vec3::Zero();
-      u[i] = -e[j];
-      u[j] = e[i];
-      const Real len = u.norm();
+      // u = e_k x e: component k is zero, (i, j) are (ui, uj) = (-e_j, e_i). Its length from the
+      // two: the zero adds +0 to the sum of squares, which changes nothing.
+      const Real ui = -e[j];
+      const Real uj = e[i];
+      const Real len = std::sqrt(ui * ui + uj * uj);
       if (!(len > 1e-6 * edge_lengths[t])) continue;
       const Real inverse = 1 / len;
-      const Real p0 = u[i] * local[0][i] + u[j] * local[0][j];
-      const Real p1 = u[i] * local[1][i] + u[j] * local[1][j];
-      const Real p2 = u[i] * local[2][i] + u[j] * local[2][j];
-      const Real radius = h[i] * std::abs(u[i]) + h[j] * std::abs(u[j]);
+      const Real p0 = ui * local[0][i] + uj * local[0][j];
+      const Real p1 = ui * local[1][i] + uj * local[1][j];
+      const Real p2 = ui * local[2][i] + uj * local[2][j];
+      const Real radius = h[i] * std::abs(ui) + h[j] * std::abs(uj);
       const Real plus = (std::max({p0, p1, p2}) + radius) * inverse;
       const Real minus = (radius - std::min({p0, p1, p2})) * inverse;
       separation = std::max(separation, -std::min(plus, minus));
