@@ -395,6 +395,59 @@ TEST(ContactBox, MarginAndOneSided) {
   EXPECT_EQ(box_contacts(make_box({0, 0, -0.6}, Mat3::Identity(), {0.5, 0.5, 0.5}), kBigFloor, c, one_sided), 0);
 }
 
+// A box tilted on a big floor, sunk by a corner: its points over the triangle are its corners
+// (no edge of it crosses the prism's walls, no corner of the floor is under it), and every corner
+// with depth >= -margin comes back, each at its height below the plane, the others (the top ones,
+// the bottom ones lifted beyond the margin) not.
+TEST(ContactBox, TiltedOnAFaceGivesTheCornersWithinTheMargin) {
+  Random rng(83);
+  int lifted_within = 0;  // corners above the plane reported by the margin
+  int lifted_beyond = 0;  // corners above the plane left out
+  for (int trial = 0; trial < scaled(400); ++trial) {
+    const Real yaw = rng.uniform(0, 6.28);
+    const Real tilt = rng.uniform(0.01, 0.2);
+    const Mat3 axes = (Eigen::AngleAxis<Real>(yaw, Vec3::UnitZ()) *
+                       Eigen::AngleAxis<Real>(tilt, Vec3(rng.uniform(-1, 1), 1, 0).normalized()))
+                          .toRotationMatrix();
+    const Vec3 half = rng.uniform_vec3(0.2, 1);
+    Obb box = make_box(Vec3::Zero(), axes, half);
+    std::array<Real, 8> corner_z;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 sign((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+      corner_z[std::size_t(k)] = (axes * sign.cwiseProduct(half)).z();
+    }
+    const Real lowest = *std::min_element(corner_z.begin(), corner_z.end());
+    const Real x = rng.uniform(-1, 1);
+    const Real y = rng.uniform(-1, 1);
+    const Real sink = rng.uniform(0.001, 0.05);
+    box.center = Vec3(x, y, -sink - lowest);
+    ContactOptions options;
+    options.margin = rng.uniform(0, 0.3);
+    std::vector<Real> expected;
+    for (Real z : corner_z) {
+      const Real depth = -(box.center.z() + z);
+      if (depth >= -options.margin + 1e-9) expected.push_back(depth);
+      if (depth < 0 && depth >= -options.margin + 1e-9) ++lifted_within;
+      if (depth < -options.margin - 1e-9 && depth > -0.3) ++lifted_beyond;
+      ASSERT_FALSE(std::abs(depth + options.margin) <= 1e-9) << trial;  // no corner on the margin
+    }
+    ContactPoint c[kMaxBoxTriangleContacts];
+    const int n = box_contacts(box, kBigFloor, c, options);
+    ASSERT_EQ(n, int(expected.size())) << trial;
+    std::vector<Real> got;
+    for (int i = 0; i < n; ++i) {
+      EXPECT_TRUE(c[i].normal.isApprox(Vec3::UnitZ(), kTol)) << trial;
+      EXPECT_NEAR(c[i].position.z(), 0, kTol) << trial;
+      got.push_back(c[i].depth);
+    }
+    std::sort(expected.begin(), expected.end());
+    std::sort(got.begin(), got.end());
+    for (int i = 0; i < n; ++i) EXPECT_NEAR(got[std::size_t(i)], expected[std::size_t(i)], kTol) << trial;
+  }
+  EXPECT_GT(lifted_within, scaled(400) / 2);
+  EXPECT_GT(lifted_beyond, scaled(400) / 4);
+}
+
 // ------------------------------------------------------------------------------------------
 // Convex shapes through libccd
 

@@ -21,17 +21,30 @@ Real cross_2d(const Vec2& o, const Vec2& a, const Vec2& b) {
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
 
-// Twice the area that q adds to the convex polygon `hull` (counter-clockwise, h vertices; a
-// segment or a point when h < 3): the triangles from q to the edges that face it.
-Real added_area_2d(const Vec2* hull, int h, const Vec2& q) {
-  if (h == 1) return 0;
-  if (h == 2) return std::abs(cross_2d(hull[0], hull[1], q));
-  Real added = 0;
-  for (int i = 0, next = 1; i < h; ++i, ++next) {
-    const Real c = cross_2d(hull[i], hull[next == h ? 0 : next], q);
-    if (c < 0) added -= c;
+// Twice the area that each candidate (x[i], y[i]), i in [0, n), adds to the convex polygon `hull`
+// (counter-clockwise, h vertices; a segment or a point when h < 3), in added[i]: the triangles
+// from the candidate to the edges that face it, i.e. the sum over the hull's edges (o, b), in
+// their order, of -c for the cross products c = (b.x - o.x) (q.y - o.y) - (b.y - o.y) (q.x - o.x)
+// that are negative. Each loop runs over the candidates without a branch, so that it vectorizes:
+// an edge that does not face the candidate (c >= 0, or NaN) adds +0, which leaves the sum as it
+// is.
+void added_areas_2d(const Vec2* hull, int h, const Real* x, const Real* y, int n, Real* added) {
+  std::fill(added, added + n, Real(0));
+  if (h == 1) return;
+  for (int e = 0; e < h; ++e) {
+    const Vec2& o = hull[e];
+    const Vec2& b = hull[e + 1 == h ? 0 : e + 1];
+    const Real ex = b.x() - o.x();
+    const Real ey = b.y() - o.y();
+    if (h == 2) {  // a segment: the triangle on it
+      for (int i = 0; i < n; ++i) added[i] = std::abs(ex * (y[i] - o.y()) - ey * (x[i] - o.x()));
+      return;
+    }
+    for (int i = 0; i < n; ++i) {
+      const Real c = ex * (y[i] - o.y()) - ey * (x[i] - o.x());
+      added[i] += std::max(Real(0), -c);  // x - c is x + (-c)
+    }
   }
-  return added;
 }
 
 // Merges near-duplicates (same place within `merge_distance`, normals within ~10 degrees) of
@@ -101,13 +114,15 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
   Vec3 w;
   detail::orthonormal_completion(contacts[0].normal.normalized(), u, w);
   const int n = std::min(kept, 64);
-  std::array<Vec2, 64> planar;
-  planar.fill(Vec2::Zero());      // only [0, n) is read; GCC cannot tell
+  std::array<Real, 64> planar_x;
+  std::array<Real, 64> planar_y;
+  std::array<Real, 64> added;     // twice the area each candidate adds to the chosen set's hull
   std::array<Real, 64> distance;  // squared, to the nearest chosen point
   std::array<bool, 64> chosen{};
   Real extent_squared = 0;
   for (int i = 0; i < n; ++i) {
-    planar[i] = Vec2(contacts[i].position.dot(u), contacts[i].position.dot(w));
+    planar_x[i] = contacts[i].position.dot(u);
+    planar_y[i] = contacts[i].position.dot(w);
     distance[i] = (contacts[i].position - contacts[0].position).squaredNorm();
     extent_squared = std::max(extent_squared, distance[i]);
   }
@@ -118,24 +133,26 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
   order[0] = 0;
   int selected = 1;
   int h = 1;
-  hull[0] = planar[0];
+  hull[0] = Vec2(planar_x[0], planar_y[0]);
   Real area = 0;  // twice the chosen set's hull area
   while (selected < std::min(max_count, n)) {
+    added_areas_2d(hull.data(), h, planar_x.data(), planar_y.data(), n, added.data());
     int best = -1;
     Real best_area = -1;
     Real best_distance = -1;
+    // Areas compare with a slack (relative, and to the set's size for collinear sets, whose
+    // areas are rounding noise) so that rounding does not beat a real spread.
+    Real slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
     for (int i = 0; i < n; ++i) {
       if (chosen[i]) continue;
-      const Real candidate_area = area + added_area_2d(hull.data(), h, planar[i]);
-      // Areas compare with a slack (relative, and to the set's size for collinear sets, whose
-      // areas are rounding noise) so that rounding does not beat a real spread.
-      const Real slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
+      const Real candidate_area = area + added[i];
       const bool better =
           candidate_area > best_area + slack || (candidate_area >= best_area - slack && distance[i] > best_distance);
       if (better) {
         best = i;
         best_area = candidate_area;
         best_distance = distance[i];
+        slack = 1e-9 * std::max(best_area, Real(0)) + 1e-12 * extent_squared;
       }
     }
     if (best < 0) break;
@@ -144,7 +161,7 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
     for (int i = 0; i < n; ++i) {
       distance[i] = std::min(distance[i], (contacts[i].position - contacts[best].position).squaredNorm());
     }
-    for (int s = 0; s < selected; ++s) points[s] = planar[order[s]];
+    for (int s = 0; s < selected; ++s) points[s] = Vec2(planar_x[order[s]], planar_y[order[s]]);
     h = detail::convex_hull_2d(points.data(), selected, hull.data());
     area = 0;
     for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[i + 1 == h ? 0 : i + 1]);

@@ -111,9 +111,10 @@ constexpr int kScratchContacts = 48;
 // the shape over the triangle is a vertex of shape-within-prism, which is a shape vertex inside
 // the prism, a shape edge crossing a prism wall, or a prism edge (the line through a triangle
 // corner along N) crossing the shape's boundary: all three kinds are generated, so the deepest
-// contact is exactly the directional penetration depth along N.
+// contact is exactly the directional penetration depth along N. Contacts with depth < least_depth
+// are left out; the others come in the same order as with no such bound (-kInf).
 int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
-                           ContactPoint* out) {
+                           Real least_depth, ContactPoint* out) {
   int count = 0;
   const Real plane = normal.dot(tri.v[0]);
   Vec3 walls[3];
@@ -124,18 +125,28 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     }
     return true;
   };
-  const auto add = [&](const Vec3& x) {
+  const auto depth_of = [&](const Vec3& x) { return plane - normal.dot(x); };
+  const auto add = [&](const Vec3& x, Real depth) {
     if (count >= kScratchContacts) return;
-    const Real depth = plane - normal.dot(x);
     out[count++] = make_contact(x + depth * normal, normal, depth);
   };
   // The corners' signed distances to the walls, worked out once (up to kCachedCorners corners):
-  // every corner is on three or more edges, which read the same values.
+  // every corner is on three or more edges, which read the same values. With them, bit i of
+  // below[v] (above[v]) is whether corner v is strictly on the outer (inner) side of wall i.
   constexpr int kCachedCorners = 64;
   std::array<std::array<Real, 3>, kCachedCorners> wall_distance;
+  std::array<unsigned, kCachedCorners> below;
+  std::array<unsigned, kCachedCorners> above;
   const bool cached = shape.vertex_count <= kCachedCorners;
   for (int v = 0; cached && v < shape.vertex_count; ++v) {
-    for (int i = 0; i < 3; ++i) wall_distance[v][i] = walls[i].dot(shape.vertices[v] - tri.v[i]);
+    below[v] = 0;
+    above[v] = 0;
+    for (int i = 0; i < 3; ++i) {
+      const Real d = walls[i].dot(shape.vertices[v] - tri.v[i]);
+      wall_distance[v][i] = d;
+      below[v] |= unsigned(d < 0) << i;
+      above[v] |= unsigned(d > 0) << i;
+    }
   }
   const auto distance = [&](int v, int i) {
     return cached ? wall_distance[v][i] : walls[i].dot(shape.vertices[v] - tri.v[i]);
@@ -143,17 +154,29 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
   for (int v = 0; v < shape.vertex_count; ++v) {
     bool inside = true;
     for (int i = 0; i < 3 && inside; ++i) inside = !(distance(v, i) < -slack);
-    if (inside) add(shape.vertices[v]);
+    if (!inside) continue;
+    const Real depth = depth_of(shape.vertices[v]);
+    if (!(depth < least_depth)) add(shape.vertices[v], depth);
   }
   for (int e = 0; e < shape.edge_count; ++e) {
-    const Vec3& p = shape.vertices[shape.edge_from[e]];
-    const Vec3& q = shape.vertices[shape.edge_to[e]];
+    const int from = shape.edge_from[e];
+    const int to = shape.edge_to[e];
+    // The walls whose planes the edge crosses strictly (its ends on opposite sides).
+    unsigned crossed = 7;
+    if (cached) {
+      crossed = (below[from] & above[to]) | (above[from] & below[to]);
+      if (crossed == 0) continue;
+    }
+    const Vec3& p = shape.vertices[from];
+    const Vec3& q = shape.vertices[to];
     for (int i = 0; i < 3; ++i) {
-      const Real fp = distance(shape.edge_from[e], i);
-      const Real fq = distance(shape.edge_to[e], i);
+      if (!((crossed >> i) & 1)) continue;
+      const Real fp = distance(from, i);
+      const Real fq = distance(to, i);
       if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
       const Vec3 x = p + (fp / (fp - fq)) * (q - p);
-      if (inside_prism(x, i)) add(x);
+      const Real depth = depth_of(x);
+      if (!(depth < least_depth) && inside_prism(x, i)) add(x, depth);
     }
   }
   // Lines v - t*N through the triangle's corners against the shape's bounding half-spaces
@@ -180,7 +203,7 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     }
   }
   for (int j = 0; j < 3 && shape.bound_count > 0; ++j) {
-    if (t_lo[j] <= t_hi[j] + slack && std::isfinite(t_hi[j]) && count < kScratchContacts) {
+    if (t_lo[j] <= t_hi[j] + slack && std::isfinite(t_hi[j]) && !(t_hi[j] < least_depth) && count < kScratchContacts) {
       out[count++] = make_contact(tri.v[j], normal, t_hi[j]);
     }
   }
@@ -360,17 +383,17 @@ bool box_axes(const Polytope& box, const TriangleFrame& tri, Real margin, Real c
     const int j = kAfterNext[k];
     for (int t = 0; t < 3; ++t) {
       const Vec3& e = local_edges[t];
-      // u = e_k x e: component k is zero, (i, j) are (-e_j, e_i).
-      Vec3 u = Vec3::Zero();
-      u[i] = -e[j];
-      u[j] = e[i];
-      const Real len = u.norm();
+      // u = e_k x e: component k is zero, (i, j) are (ui, uj) = (-e_j, e_i). Its length from the
+      // two: the zero adds +0 to the sum of squares, which changes nothing.
+      const Real ui = -e[j];
+      const Real uj = e[i];
+      const Real len = std::sqrt(ui * ui + uj * uj);
       if (!(len > 1e-6 * edge_lengths[t])) continue;
       const Real inverse = 1 / len;
-      const Real p0 = u[i] * local[0][i] + u[j] * local[0][j];
-      const Real p1 = u[i] * local[1][i] + u[j] * local[1][j];
-      const Real p2 = u[i] * local[2][i] + u[j] * local[2][j];
-      const Real radius = h[i] * std::abs(u[i]) + h[j] * std::abs(u[j]);
+      const Real p0 = ui * local[0][i] + uj * local[0][j];
+      const Real p1 = ui * local[1][i] + uj * local[1][j];
+      const Real p2 = ui * local[2][i] + uj * local[2][j];
+      const Real radius = h[i] * std::abs(ui) + h[j] * std::abs(uj);
       const Real plus = (std::max({p0, p1, p2}) + radius) * inverse;
       const Real minus = (radius - std::min({p0, p1, p2})) * inverse;
       separation = std::max(separation, -std::min(plus, minus));
@@ -624,10 +647,16 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
   // Per thread, not per call: constructing 48 contacts (3 KB of default members) was 14% of a
   // box-vs-triangle call's samples.
   thread_local std::array<ContactPoint, kScratchContacts> scratch;
-  const auto generate = [&](const Axis& axis) {
+  // The triangle's face contacts below -margin are dropped by the filter at the end and read by
+  // nothing else but `reaches` (the deepest of all): when that is not asked (all_depths false)
+  // and the scratch cannot fill up (so that they cannot take the place of later ones), they are
+  // not made at all.
+  const bool scratch_holds_all = shape.vertex_count + 3 * shape.edge_count + 3 <= kScratchContacts;
+  const auto generate = [&](const Axis& axis, bool all_depths = false) {
     switch (axis.kind) {
       case AxisKind::kTriangleFace:
-        return triangle_face_contacts(shape, tri, axis.normal, slack, scratch.data());
+        return triangle_face_contacts(shape, tri, axis.normal, slack,
+                                      all_depths || !scratch_holds_all ? -kInf : -margin, scratch.data());
       case AxisKind::kShapeFace:
         return shape_face_contacts(shape.face(axis.shape_index), tri, scratch.data());
       case AxisKind::kEdges:
@@ -656,7 +685,7 @@ int polytope_triangle(const Polytope& shape, const TriangleFrame& tri, const Con
     // triangle's corners, its corners and edges). The search also rounds: at 10 m from the
     // origin its distance came out ~1e-8 longer than the gap, far above `slack`, and a face
     // hovering over a facet then got one closest point instead of its patch.
-    count = generate(chosen);
+    count = generate(chosen, true);
     if (!reaches(chosen, count)) {
       const PolytopeTrianglePair pair = closest_polytope_triangle(shape, tri);
       const Real distance = std::sqrt(pair.distance_squared);
