@@ -13,13 +13,6 @@
 #include "internal.h"
 
 namespace boxtree {
-namespace detail {
-// The facets run_pipeline visits (ConvexPairCacheAccess::visit_candidates, below).
-// Returns true when they came from the cache's candidate list.
-template <class Query>
-bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
-                      FunctionRef<bool(FacetId)> visit);
-}  // namespace detail
 namespace {
 
 // Steps 1-5 of collider.h for one query volume: `per_facet(a, b, c, options, out)` is the
@@ -28,36 +21,40 @@ namespace {
 // (which is then no candidate).
 template <int Capacity, class Query, class PerFacet>
 void run_pipeline(const CollisionMesh& mesh, const Query& query, FacetTest test, const ContactRequest& request,
-                  const ContactOptions& options, ContactResult& result, ConvexPairCache* cache, PerFacet&& per_facet) {
+                  const ContactOptions& options, ContactResult& result, PerFacet&& per_facet) {
   const TriangleMesh& m = mesh.mesh();
   const std::vector<std::uint8_t>& active = mesh.active_edges();
   const std::size_t max_contacts = std::max<std::size_t>(request.max_contacts, 1);
   ContactPoint found[Capacity];
-  result.counts.listed = detail::visit_candidates(mesh, query, test, cache, [&](FacetId facet) {
-    const Vec3& a = m.corner(facet, 0);
-    const Vec3& b = m.corner(facet, 1);
-    const Vec3& c = m.corner(facet, 2);
-    const int n = per_facet(a, b, c, options, found);
-    if (n < 0) return true;
-    ++result.counts.candidates;
-    result.counts.found += std::size_t(n);
-    if (n > 0) {
-      const InternalEdgeCorrection correct_edge(a, b, c, request.internal_edges ? active[facet] : std::uint8_t(0x7));
-      for (int i = 0; i < n; ++i) {
-        found[i].facet = facet;
-        if (request.internal_edges) {
-          const EdgeContact verdict = correct_edge(found[i]);
-          if (verdict == EdgeContact::discard) {
-            ++result.counts.edge_discarded;
-            continue;  // beside this facet: its neighbour reports the real contact
+  mesh.tree().query_overlap(
+      query,
+      [&](FacetId facet) {
+        const Vec3& a = m.corner(facet, 0);
+        const Vec3& b = m.corner(facet, 1);
+        const Vec3& c = m.corner(facet, 2);
+        const int n = per_facet(a, b, c, options, found);
+        if (n < 0) return true;
+        ++result.counts.candidates;
+        result.counts.found += std::size_t(n);
+        if (n > 0) {
+          const InternalEdgeCorrection correct_edge(a, b, c,
+                                                    request.internal_edges ? active[facet] : std::uint8_t(0x7));
+          for (int i = 0; i < n; ++i) {
+            found[i].facet = facet;
+            if (request.internal_edges) {
+              const EdgeContact verdict = correct_edge(found[i]);
+              if (verdict == EdgeContact::discard) {
+                ++result.counts.edge_discarded;
+                continue;  // beside this facet: its neighbour reports the real contact
+              }
+              if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
+            }
+            result.contacts.push_back(found[i]);
           }
-          if (verdict == EdgeContact::corrected) ++result.counts.edge_corrected;
         }
-        result.contacts.push_back(found[i]);
-      }
-    }
-    return !(request.early_stop && result.contacts.size() >= max_contacts);
-  });
+        return !(request.early_stop && result.contacts.size() >= max_contacts);
+      },
+      nullptr, test);
 }
 
 // Step 5.
@@ -153,7 +150,7 @@ int apply_front(const SupportShape& shape, const Vec3& a, const Vec3& b, const V
 }
 
 void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
-                   ContactResult& result, ConvexPairCache* cache) {
+                   ContactResult& result) {
   if (!is_valid(sphere) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -163,7 +160,7 @@ void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const Contac
   // the narrowphase's.
   const Sphere query{sphere.center, sphere.radius + request.margin};
   run_pipeline<kMaxSphereTriangleContacts>(
-      mesh, query, FacetTest::none, request, options, result, cache,
+      mesh, query, FacetTest::none, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         const Vec3 closest = closest_point_on_triangle(query.center, a, b, c);
         if (!((closest - query.center).squaredNorm() <= query.radius * query.radius)) return -1;
@@ -172,8 +169,7 @@ void collide_shape(const CollisionMesh& mesh, const Sphere& sphere, const Contac
   reduce(request, result);
 }
 
-void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result,
-                   ConvexPairCache* cache) {
+void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactRequest& request, ContactResult& result) {
   if (!is_valid(box) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -182,13 +178,12 @@ void collide_shape(const CollisionMesh& mesh, const Obb& box, const ContactReque
   Obb query = box;
   query.half_extents.array() += request.margin;
   const detail::BoxTriangleContacts contacts(box);  // contact_box_triangle, the box's polytope built once
-  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, cache,
-                                        contacts);
+  run_pipeline<kMaxBoxTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, contacts);
   reduce(request, result);
 }
 
 void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const ContactRequest& request,
-                   ContactResult& result, ConvexPairCache* cache) {
+                   ContactResult& result) {
   if (!is_valid(capsule) || !valid_request(request)) {
     result.counts.invalid_input = true;
     return;
@@ -198,7 +193,7 @@ void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const Cont
   // facet otherwise), and the closest pairs it computes are the narrowphase's.
   const Capsule query{capsule.p0, capsule.p1, capsule.radius + request.margin};
   run_pipeline<kMaxCapsuleTriangleContacts>(
-      mesh, query, FacetTest::none, request, options, result, cache,
+      mesh, query, FacetTest::none, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         detail::SegmentTrianglePair boundary;
         if (!detail::triangle_overlaps_capsule(a, b, c, query, boundary)) return -1;
@@ -208,7 +203,7 @@ void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const Cont
 }
 
 void collide_shape(const CollisionMesh& mesh, const Cylinder& cylinder, const ContactRequest& request,
-                   ContactResult& result, ConvexPairCache* cache) {
+                   ContactResult& result) {
   if (!cylinder.p0.allFinite() || !cylinder.p1.allFinite() || !(cylinder.radius >= 0) ||
       !std::isfinite(cylinder.radius) || !valid_request(request)) {
     result.counts.invalid_input = true;
@@ -218,13 +213,13 @@ void collide_shape(const CollisionMesh& mesh, const Cylinder& cylinder, const Co
   const Obb query = segment_box(cylinder.p0, cylinder.p1, cylinder.radius + request.margin, request.margin);
   // contact_cylinder_triangle, the cylinder's axis and support set up once
   const detail::CylinderTriangleContacts contacts(cylinder.p0, cylinder.p1, cylinder.radius);
-  run_pipeline<kMaxCylinderTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result, cache,
+  run_pipeline<kMaxCylinderTriangleContacts>(mesh, query, FacetTest::exact_triangle, request, options, result,
                                              contacts);
   reduce(request, result);
 }
 
 void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, const ContactRequest& request,
-                   ContactResult& result, ConvexPairCache* cache) {
+                   ContactResult& result) {
   if (!finite(hull.mesh_from_local) || !(hull.rounding >= 0) || !std::isfinite(hull.rounding) ||
       !valid_request(request) || hull.local.vertices.empty()) {
     result.counts.invalid_input = true;
@@ -241,7 +236,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, cons
   // within the margin of the hull meets its box grown by the margin.
   const Obb query = placed_box(hull.local.vertices, hull.mesh_from_local, hull.rounding + request.margin);
   run_pipeline<kMaxPolyhedronTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result, cache,
+      mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         const int n = contact_polyhedron_triangle(placed, a, b, c, o, out);
         for (int i = 0; i < n; ++i) out[i].depth += hull.rounding;
@@ -251,7 +246,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, cons
 }
 
 void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const ContactRequest& request,
-                   ContactResult& result, ConvexPairCache* cache) {
+                   ContactResult& result) {
   if (!finite(hull.mesh_from_local) || !valid_request(request) || hull.local.empty()) {
     result.counts.invalid_input = true;
     return;
@@ -273,7 +268,7 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const Co
   const ConvexSupport shape{support, centroid, true};
   run_pipeline<kMaxConvexTriangleContacts>(
       mesh, placed_box(hull.local, hull.mesh_from_local, request.margin), FacetTest::exact_triangle, request, options,
-      result, cache, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
+      result, [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         return contact_convex_triangle(shape, a, b, c, o, out);
       });
   reduce(request, result);
@@ -432,12 +427,12 @@ struct ConvexPairCacheAccess {
            std::memcmp(x.max.data(), y.max.data(), 3 * sizeof(Real)) == 0;
   }
 
-  // The call: the cache's contacts when its last input equals this one, else collide_shape (with
-  // the cache's candidate list) and, when the shape lies where it did, the input and contacts kept.
+  // The call: the cache's contacts when its last input equals this one, else collide_shape and,
+  // when the shape lies where it did, the input and contacts kept.
   template <class Shape>
   static void collide(ConvexPairCache* cache, const CollisionMesh& mesh, const Shape& shape,
                       const ContactRequest& request, ContactResult& result) {
-    if (!cache) return collide_shape(mesh, shape, request, result, nullptr);
+    if (!cache) return collide_shape(mesh, shape, request, result);
     result.clear();
     ConvexPairCache& c = *cache;
     if (c.tree_.identity() != mesh.tree().identity()) {
@@ -461,7 +456,7 @@ struct ConvexPairCacheAccess {
         return;
       }
     }
-    collide_shape(mesh, shape, request, result, &c);
+    collide_shape(mesh, shape, request, result);
     if (result.counts.invalid_input) {
       c.clear();
       return;
@@ -475,73 +470,7 @@ struct ConvexPairCacheAccess {
     c.contacts_.assign(result.contacts.begin(), result.contacts.end());
     c.two_sided_fallback_ = result.counts.two_sided_fallback;
   }
-
-  // The facets of `query` for run_pipeline: the tree walk's, or the cache's candidate list's (see
-  // ConvexPairCache), the same facets in the same order, each passed through the same leaf test.
-  static Aabb query_box(const Sphere& s) {
-    const Vec3 r = Vec3::Constant(s.radius);
-    return {s.center - r, s.center + r};
-  }
-  static Aabb query_box(const Obb& box) { return shape_box(box, 0); }
-  static Aabb query_box(const Capsule& c) { return segment_shape_box(c.p0, c.p1, c.radius); }
-
-  template <class Query>
-  static bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
-                               FunctionRef<bool(FacetId)> visit) {
-    const AnyTree& tree = mesh.tree();
-    if (!cache || !tree.packed() || test == FacetTest::leaf_volume || !is_valid(query)) {
-      tree.query_overlap(query, visit, nullptr, test);
-      return false;
-    }
-    ConvexPairCache& c = *cache;  // c.tree_ is the mesh's tree (collide)
-    const Aabb box = query_box(query);
-    const Real size = box.extent().norm();
-    const Real tolerance = Real(1e-9) * (size + box.min.cwiseAbs().cwiseMax(box.max.cwiseAbs()).maxCoeff());
-    if (!(size > 0) || !std::isfinite(size + tolerance)) {
-      tree.query_overlap(query, visit, nullptr, test);
-      return false;
-    }
-    if (c.reach_.is_empty() || !contains(c.reach_, box, -tolerance)) {
-      const Vec3 moved = (box.min - c.last_query_.min).cwiseAbs().cwiseMax((box.max - c.last_query_.max).cwiseAbs());
-      const bool slow = !c.last_query_.is_empty() && moved.maxCoeff() <= size / 64;
-      c.last_query_ = box;
-      c.reach_ = Aabb::empty();
-      if (!slow) {
-        tree.query_overlap(query, visit, nullptr, test);
-        return false;
-      }
-      c.reach_ = {box.min - Vec3::Constant(size / 16), box.max + Vec3::Constant(size / 16)};
-      c.candidates_.clear();
-      tree.query_overlap(
-          c.reach_,
-          [&](FacetId f) {
-            c.candidates_.push_back(f);
-            return true;
-          },
-          nullptr, FacetTest::exact_triangle);
-    }
-    c.last_query_ = box;
-    const TriangleMesh& m = mesh.mesh();
-    const auto exact = [&] {
-      if constexpr (std::is_same_v<Query, Obb>) {
-        return ObbTriangleTest(query);
-      } else {
-        return [&](const Vec3& a, const Vec3& b, const Vec3& c2) { return triangle_overlaps(a, b, c2, query); };
-      }
-    }();
-    for (const FacetId f : c.candidates_) {
-      if (test == FacetTest::exact_triangle && !exact(m.corner(f, 0), m.corner(f, 1), m.corner(f, 2))) continue;
-      if (!visit(f)) break;
-    }
-    return true;
-  }
 };
-
-template <class Query>
-bool visit_candidates(const CollisionMesh& mesh, const Query& query, FacetTest test, ConvexPairCache* cache,
-                      FunctionRef<bool(FacetId)> visit) {
-  return ConvexPairCacheAccess::visit_candidates(mesh, query, test, cache, visit);
-}
 
 }  // namespace detail
 
@@ -554,14 +483,10 @@ void ConvexPairCache::clear() {
   hull_copied_ = false;
   contacts_.clear();
   two_sided_fallback_ = false;
-  last_query_ = Aabb::empty();
-  reach_ = Aabb::empty();
-  candidates_.clear();
 }
 
 std::size_t ConvexPairCache::memory_bytes() const {
-  return placement_.capacity() + hull_.capacity() + contacts_.capacity() * sizeof(ContactPoint) +
-         candidates_.capacity() * sizeof(FacetId);
+  return placement_.capacity() + hull_.capacity() + contacts_.capacity() * sizeof(ContactPoint);
 }
 
 void collide_convex(const CollisionMesh& mesh, const Sphere& sphere, const ContactRequest& request,
@@ -620,7 +545,7 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, const 
   query.half_extents.array() += request.margin;
   const ConvexSupport convex{shape.support, shape.center, shape.polytope};
   run_pipeline<kMaxConvexTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result, nullptr,
+      mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
         return contact_convex_triangle(convex, a, b, c, o, out);
@@ -640,7 +565,7 @@ void collide_convex(const CollisionMesh& mesh, const SupportShape& shape, Triang
   Obb query = shape.bounds;
   query.half_extents.array() += request.margin;
   run_pipeline<kMaxEngineTriangleContacts>(
-      mesh, query, FacetTest::exact_triangle, request, options, result, nullptr,
+      mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         if (out_of_reach(shape, a, b, c, o.margin)) return 0;
         const int n = within_margin(

@@ -404,9 +404,6 @@ struct GridSphere {
 // Depth-first walk over the children whose box passes `child_mask(node)` (bit c: child c; never
 // set for an empty slot);
 // `leaf(facet)` returns false to stop. The caller has tested the root's volume (the exact bounds).
-// The facets come in one order whatever the masks: at each node its leaf children in slot order,
-// then its inner children's subtrees in slot order. A query thus meets its facets in the order a
-// larger query meets them (ConvexPairCache's candidate lists rely on it).
 template <class ChildMask, class Leaf>
 void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, QueryStats& stats) {
   const std::uint32_t root = tree.root_link();
@@ -428,29 +425,24 @@ void walk(const PackedAabbTree& tree, ChildMask&& child_mask, Leaf&& leaf, Query
     static_assert(kWidth == 4, "the table counts 4-bit masks");
     constexpr unsigned char kBitsSet[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
     stats.nodes_visited += kBitsSet[mask];
-    // Leaves are handled at once; of the inner children, descend into the first, keep the rest
-    // (pushed last first, so that they come out in slot order).
-    std::uint32_t inner[kWidth];
-    int inner_count = 0;
+    // Leaves are handled at once; of the inner children, descend into the first, keep the rest.
+    bool descend = false;
     while (mask != 0) {
       const int slot = __builtin_ctz(mask);
       mask &= mask - 1;
       const std::uint32_t link = node.link[slot];
       if (PackedAabbTree::is_leaf(link)) {
         if (!leaf(PackedAabbTree::facet(link))) return;
+      } else if (!descend) {
+        current = link;
+        descend = true;
       } else {
-        inner[inner_count++] = link;
-      }
-    }
-    if (inner_count > 0) {
-      for (int k = inner_count - 1; k > 0; --k) {
         // Read only after the current subtree: start loading it now (it is far in the array).
-        __builtin_prefetch(&nodes[inner[k]]);
-        stack[top++] = inner[k];
+        __builtin_prefetch(&nodes[link]);
+        stack[top++] = link;
       }
-      current = inner[0];
-      continue;
     }
+    if (descend) continue;
     if (top == 0) return;
     current = stack[--top];
   }

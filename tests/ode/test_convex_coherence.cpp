@@ -2,10 +2,9 @@
 // Convex-vs-mesh temporal coherence in ODE (GeomSettings::convex_coherence, ConvexPairCache): the
 // drop scene's spheres, boxes, capsules and cylinders and two hulls (one with faces, one of
 // points) settle on the boxtree terrain with auto-disable, and step bit for bit the same with the
-// per-pair state as without, while disabled bodies' pairs are answered from it (and slow ones take
-// their facets from candidate lists); a disabled body moved by hand and a changed geom setting
-// are collided afresh; the registry evicts pairs unseen for a few steps and every pair of a
-// destroyed geom, and stays within its bounds.
+// per-pair state as without, while disabled bodies' pairs are answered from it; a disabled body
+// moved by hand and a changed geom setting are collided afresh; the registry evicts pairs unseen for a few steps and
+// every pair of a destroyed geom, and stays within its bounds.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -157,8 +156,8 @@ TEST(OdeConvexCoherence, PairEntriesEvictedUnseenAndOnDestroy) {
   // A forgotten convex takes its entry along.
   ode::forget_convex(scene->hulls[0]);
   EXPECT_LT(ode::convex_pair_cache_info().pairs, resting);
-  // Bodies thrown up stop looking their pairs up (too fast for the state to pay): after a few
-  // steps only the one left resting is kept.
+  // Woken bodies (thrown up) stop looking their pairs up: after a few steps only the one left
+  // resting is kept.
   for (std::size_t k = 0; k + 1 < scene->bodies.size(); ++k) {
     dBodyEnable(scene->bodies[k]);
     dBodySetAutoDisableFlag(scene->bodies[k], 0);

@@ -59,7 +59,6 @@ struct CollisionCounts {
   bool two_sided_fallback = false;  // one-sided asked, but the mesh's winding is inconsistent
   bool invalid_input = false;       // a non-finite pose or an invalid shape: nothing was done
   bool reused = false;              // the contacts of a ConvexPairCache's last call, no collision work done
-  bool listed = false;              // the facets came from a ConvexPairCache's candidate list, no tree walk
 };
 
 struct ContactResult {
@@ -78,23 +77,18 @@ struct ConvexPairCacheAccess;
 }
 
 // The state one pair of a mesh and a convex body keeps between calls of collide_convex (temporal
-// coherence: one per pair of bodies, freed with the pair). Two things, each giving the contacts of
-// a call without the cache, bit for bit, whatever the sequence of calls:
-//  - The last input and its contacts. A call whose input equals the last one bit for bit (the
-//    shape as placed in the mesh's frame, the request, the mesh's tree; a hull's arrays too), as
-//    for a body that has not moved relative to the mesh (an engine's disabled or kinematic body
-//    at rest), gets those contacts again without any collision work; its counts are zero but for
-//    `reused` and `two_sided_fallback`. The input is kept only once a call's shape lies where the
-//    last one did, and a hull's arrays only once its placement repeats, so that a moving body
-//    pays neither: a shape at rest is answered from its third call on, a hull from its fourth.
-//  - The candidate facets of an inflated query box (packed `aabb` trees: the adapters' default).
-//    When the query's box has moved by less than a sixty-fourth of its size since the last call
-//    (a slow body), the facets meeting that box grown by a sixteenth are listed once; while later
-//    queries stay inside it, their facets come from the list (each with the same leaf test as the
-//    walk, in the walk's order) instead of a tree walk.
-// Memory: the input's bytes (a hull's arrays: about 0.6 KiB per corner), at most max_contacts
-// contacts and the candidate list (memory_bytes()). The mesh's tree is held, so that a tree
-// cannot die and another take its address. Not shared between threads.
+// coherence: one per pair of bodies, freed with the pair): the last input and its contacts. A call
+// whose input equals the last one bit for bit (the shape as placed in the mesh's frame, the
+// request, the mesh's tree; a hull's arrays too), as for a body that has not moved relative to the
+// mesh (an engine's disabled or kinematic body at rest), gets those contacts again without any
+// collision work; its counts are zero but for `reused` and `two_sided_fallback`. Any other call
+// collides. The contacts are therefore those of a call without the cache, bit for bit, whatever
+// the sequence of calls. The input is kept only once a call's shape lies where the last one did,
+// and a hull's arrays only once its placement repeats, so that a moving body pays neither: a
+// shape at rest is answered from its third call on, a hull from its fourth. Memory: the input's
+// bytes (a hull's arrays: about 0.6 KiB per corner) and at most max_contacts contacts
+// (memory_bytes()). The mesh's tree is held, so that a tree cannot die and another take its
+// address. Not shared between threads.
 class ConvexPairCache {
  public:
   void clear();
@@ -110,9 +104,6 @@ class ConvexPairCache {
   bool hull_copied_ = false;              // hull_ is that call's hull
   std::vector<ContactPoint> contacts_;
   bool two_sided_fallback_ = false;
-  Aabb last_query_ = Aabb::empty();  // the last call's query box
-  Aabb reach_ = Aabb::empty();       // empty: no candidate list
-  std::vector<FacetId> candidates_;  // every facet meeting reach_, in the walk's order
 };
 
 // A cylinder with axis p0-p1 and the given radius (contact_cylinder_triangle).

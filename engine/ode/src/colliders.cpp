@@ -92,23 +92,16 @@ RigidTransform mesh_from(dGeomID mesh, dGeomID other) {
           world_from_mesh.rotation.transpose() * (world_from_other.translation - world_from_mesh.translation)};
 }
 
-// A geom slow enough for the pair's ConvexPairCache to pay: static (no body), with a disabled
-// body, or with one moving slower than 20 times its auto-disable thresholds (ODE's defaults: 0.2
-// m/s and 0.2 rad/s). Only the cost depends on it: the contacts are the same either way.
-bool slow(dGeomID geom) {
+// A geom that does not move by itself: static (no body) or with a disabled body. Only such pairs
+// can repeat their input (ODE collides a disabled body with a static geom every step).
+bool at_rest(dGeomID geom) {
   const dBodyID body = dGeomGetBody(geom);
-  if (body == nullptr || !dBodyIsEnabled(body)) return true;
-  const dReal* v = dBodyGetLinearVel(body);
-  const dReal* w = dBodyGetAngularVel(body);
-  const dReal linear = 20 * dBodyGetAutoDisableLinearThreshold(body);
-  const dReal angular = 20 * dBodyGetAutoDisableAngularThreshold(body);
-  return v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= linear * linear &&
-         w[0] * w[0] + w[1] * w[1] + w[2] * w[2] <= angular * angular;
+  return body == nullptr || !dBodyIsEnabled(body);
 }
 
 // Runs `collide(mesh, request, result, cache)` for a convex geom of size `shape_size` and writes,
 // the mesh at `world_from_mesh` (its pose, pose_of(o1)). `cache` is the pair's ConvexPairCache
-// when convex_coherence is on and both geoms are slow, else null.
+// when convex_coherence is on and both geoms are at rest, else null.
 template <class Collide>
 int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int skip, Real shape_size,
                  const RigidTransform& world_from_mesh, Collide&& collide) {
@@ -116,7 +109,7 @@ int collide_with(dGeomID o1, dGeomID o2, int flags, dContactGeom* contact, int s
   const ContactArray out{o1, o2, flags, contact, skip};
   ContactResult& result = scratch_result();
   const std::shared_ptr<ConvexPairCache> cache =
-      object.settings.convex_coherence && slow(o1) && slow(o2) ? convex_pair_cache(o1, o2) : nullptr;
+      object.settings.convex_coherence && at_rest(o1) && at_rest(o2) ? convex_pair_cache(o1, o2) : nullptr;
   collide(*object.mesh, request_for(object, out, shape_size), result, cache.get());
   return write_contacts(object, out, world_from_mesh, result, false);
 }

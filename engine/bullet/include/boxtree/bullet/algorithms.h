@@ -45,11 +45,11 @@ struct AlgorithmSettings {
   // (boxtree/collide_front.h).
   bool meshCoherence = false;
   // Convex vs mesh with temporal coherence (boxtree/collider.h's ConvexPairCache, in each pair's
-  // algorithm, freed with the pair): a pair whose input repeats bit for bit (a kinematic body held
-  // still against a static mesh, a sleeping body against an awake kinematic one) gets its last
-  // contacts again without collision work, and a slow body takes its candidate facets from a list
-  // made for a slightly larger box while it stays inside it. The contacts are the same bit for
-  // bit. Shapes that go through Bullet's GJK (support mappings) collide afresh.
+  // algorithm, freed with the pair): a pair whose input repeats bit for bit gets its last
+  // contacts again without collision work. Bullet skips pairs of sleeping bodies and wakes what
+  // touches an active kinematic object, so in a default world that is a kinematic body held still
+  // against a static mesh (with a filter mask that lets them meet). The contacts are the same bit
+  // for bit. Shapes that go through Bullet's GJK (support mappings) collide afresh.
   bool convexCoherence = true;
 };
 

@@ -89,13 +89,11 @@ struct GeomSettings {
   // default: on a resting pile of meshes it cut the volume tests to 0.06x but took 1.2x the
   // collision time (boxtree/collide_front.h). See mesh_pair_cache_info for where the state lives.
   bool mesh_coherence = false;
-  // Convex geoms with temporal coherence (boxtree/collider.h's ConvexPairCache), for pairs whose
-  // geoms are both slow: static, disabled, or moving slower than 20 times the body's
-  // auto-disable thresholds (ODE's defaults: 0.2 m/s, 0.2 rad/s). Such a pair keeps its last
-  // input and contacts, and gets them again without collision work while neither geom moves
-  // (ODE collides disabled bodies with static geoms every step), and takes its candidate facets
-  // from a list made for a slightly larger box while the body stays inside it. The contacts are
-  // the same bit for bit. Faster pairs never look the state up. See convex_pair_cache_info.
+  // Convex geoms with temporal coherence (boxtree/collider.h's ConvexPairCache): a pair whose
+  // geoms are both static or disabled (auto-disable, dBodyDisable) keeps its last input and
+  // contacts, and gets them again without collision work while neither geom moves (ODE collides
+  // disabled bodies with static geoms every step, at the same pose). The contacts are the same
+  // bit for bit. Pairs with an enabled body never look the state up. See convex_pair_cache_info.
   bool convex_coherence = true;
 };
 
@@ -145,13 +143,12 @@ void clear_mesh_pair_caches();
 
 // ---- convex coherence state ----
 // GeomSettings::convex_coherence's per-pair state (a ConvexPairCache: the last call's input and
-// contacts, a few hundred bytes, a registered hull's arrays too; a candidate list of a few hundred
-// facet ids) lives in a registry like the mesh pairs' above: made on the first call of a pair
-// whose geoms are slow, evicted once unseen for 3 steps (a body that speeds up stops looking it
-// up), dropped when either geom is a boxtree geom being destroyed or a convex given to
-// forget_convex. A stale entry is never wrong: its contacts are used only for an input equal to
-// its own bit for bit, its candidates only for a query inside their box on the same tree. At most
-// 16,384 pairs are kept; pairs beyond collide without it. Thread-safe.
+// contacts, a few hundred bytes, a registered hull's arrays too) lives in a registry like the
+// mesh pairs' above: made on the first call of a pair whose geoms are both static or disabled,
+// evicted once unseen for 3 steps (a body that wakes stops looking it up), dropped when either
+// geom is a boxtree geom being destroyed or a convex given to forget_convex. A stale entry is
+// never wrong: it is used only for an input equal to its own bit for bit. At most 16,384 pairs are
+// kept; pairs beyond collide without it. Thread-safe.
 struct ConvexPairCacheInfo {
   std::size_t pairs = 0;    // entries kept
   std::size_t bytes = 0;    // their memory (ConvexPairCache::memory_bytes)
