@@ -3,7 +3,8 @@
 // drop scene's spheres, boxes, capsules and cylinders and two hulls (one with faces, one of
 // points) settle on the boxtree terrain with auto-disable, and step bit for bit the same with the
 // per-pair state as without, while disabled bodies' pairs are answered from it; a disabled body
-// moved by hand and a changed geom setting are collided afresh; the registry evicts pairs unseen for a few steps and
+// moved by hand, a changed geom setting and bodies thrown up and landing again are collided
+// afresh; the registry evicts pairs unseen for a few steps and
 // every pair of a destroyed geom, and stays within its bounds.
 #include <gtest/gtest.h>
 
@@ -73,8 +74,9 @@ struct RestingScene {
   }
 
   // Every body's position and rotation after each step. At `nudge_step` a disabled body is
-  // moved by hand (it stays disabled), at `setting_step` the terrain's margin changes.
-  std::vector<dReal> run(int steps, int nudge_step, int setting_step) {
+  // moved by hand (it stays disabled), at `setting_step` the terrain's margin changes, and at
+  // `throw_step` every other body is thrown up (its pairs go, then come back as it lands).
+  std::vector<dReal> run(int steps, int nudge_step, int setting_step, int throw_step = -1) {
     dRandSetSeed(1);
     std::vector<dReal> trace;
     for (int i = 0; i < steps; ++i) {
@@ -84,6 +86,12 @@ struct RestingScene {
           const dReal* p = dBodyGetPosition(b);
           dBodySetPosition(b, p[0] + 1e-4, p[1], p[2]);
           break;
+        }
+      }
+      if (i == throw_step) {
+        for (std::size_t k = 0; k < bodies.size(); k += 2) {
+          dBodyEnable(bodies[k]);
+          dBodySetLinearVel(bodies[k], 0, 0, 4);
         }
       }
       if (i == setting_step) {
@@ -110,13 +118,13 @@ struct RestingScene {
 };
 
 TEST(OdeConvexCoherence, RestingBodiesStepBitIdenticallyWithAndWithoutTheCache) {
-  const int steps = 500, nudge = 300, setting = 400;
+  const int steps = 800, nudge = 300, setting = 400, thrown = 450;
   ode::clear_convex_pair_caches();
   std::vector<dReal> with, without;
   ode::CollisionCounters counters_with, counters_without;
   {
     RestingScene scene(true);
-    with = scene.run(steps, nudge, setting);
+    with = scene.run(steps, nudge, setting, thrown);
     counters_with = ode::geom_counters(scene.world.ground());
     EXPECT_GE(scene.disabled(), int(scene.bodies.size()) / 2);  // the scene does come to rest
     const ode::ConvexPairCacheInfo info = ode::convex_pair_cache_info();
@@ -132,7 +140,7 @@ TEST(OdeConvexCoherence, RestingBodiesStepBitIdenticallyWithAndWithoutTheCache) 
   EXPECT_EQ(ode::convex_pair_cache_info().pairs, 0u);  // the terrain destroyed: every entry gone
   {
     RestingScene scene(false);
-    without = scene.run(steps, nudge, setting);
+    without = scene.run(steps, nudge, setting, thrown);
     counters_without = ode::geom_counters(scene.world.ground());
     EXPECT_EQ(ode::convex_pair_cache_info().pairs, 0u);  // off: nothing kept
   }
