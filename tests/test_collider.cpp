@@ -213,6 +213,57 @@ TEST(Collider, ConvexShapesMatchPerFacetBruteForce) {
   EXPECT_GT(total, 1000u);  // the scenes do make contacts
 }
 
+// The brute-force side of the per-facet tests below: facet f's `n` contacts from its routine,
+// with the edge rule as run_pipeline applies it, counted into `want` and kept in `contacts`.
+void keep_facet_contacts(const CollisionMesh& mesh, const ContactRequest& request, FacetId f, ContactPoint* out, int n,
+                         CollisionCounts& want, std::vector<ContactPoint>& contacts) {
+  const TriangleMesh& m = mesh.mesh();
+  want.found += std::size_t(n);
+  for (int i = 0; i < n; ++i) {
+    out[i].facet = f;
+    if (request.internal_edges) {
+      const EdgeContact verdict =
+          correct_internal_edge_contact(out[i], m.corner(f, 0), m.corner(f, 1), m.corner(f, 2), mesh.active_edges()[f]);
+      if (verdict == EdgeContact::discard) {
+        ++want.edge_discarded;
+        continue;
+      }
+      if (verdict == EdgeContact::corrected) ++want.edge_corrected;
+    }
+    contacts.push_back(out[i]);
+  }
+}
+
+// The collider's result against the brute force's: the same counts, and the same contacts bit for
+// bit unless two share a place (then the walk's order decides which the merge keeps); `compared`
+// counts the contacts compared. Fatal on a count of contacts that differs.
+void expect_same_as_per_facet(const ContactResult& result, const CollisionCounts& want,
+                              std::vector<ContactPoint> contacts, std::size_t& compared) {
+  EXPECT_EQ(result.counts.candidates, want.candidates);
+  EXPECT_EQ(result.counts.found, want.found);
+  EXPECT_EQ(result.counts.edge_corrected, want.edge_corrected);
+  EXPECT_EQ(result.counts.edge_discarded, want.edge_discarded);
+  const auto by_place = [](const ContactPoint& x, const ContactPoint& y) {
+    return std::make_tuple(x.position.x(), x.position.y(), x.position.z(), x.depth) <
+           std::make_tuple(y.position.x(), y.position.y(), y.position.z(), y.depth);
+  };
+  std::sort(contacts.begin(), contacts.end(), by_place);
+  const bool shared_place = std::adjacent_find(contacts.begin(), contacts.end(), [](const auto& x, const auto& y) {
+                              return x.position == y.position;
+                            }) != contacts.end();
+  if (shared_place) return;
+  std::vector<ContactPoint> got = result.contacts;
+  std::sort(got.begin(), got.end(), by_place);
+  ASSERT_EQ(got.size(), contacts.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].position, contacts[i].position);
+    EXPECT_EQ(got[i].normal, contacts[i].normal);
+    EXPECT_EQ(got[i].depth, contacts[i].depth);
+    EXPECT_EQ(got[i].facet, contacts[i].facet);
+    ++compared;
+  }
+}
+
 // The sphere collider makes the exact triangle test itself and hands its closest point to the
 // narrowphase: its candidates are exactly the facets triangle_overlaps_sphere gives for the sphere
 // grown by the margin, its counts those of contact_sphere_triangle and the edge rule on them, and
@@ -248,45 +299,11 @@ TEST(Collider, SphereCandidatesAndContactsAreThePerFacetRoutinesBitForBit) {
         beyond_radius += !triangle_overlaps_sphere(a, b, c, sphere);
         ContactPoint out[kMaxSphereTriangleContacts];
         const int n = contact_sphere_triangle(sphere, a, b, c, options, out);
-        want.found += std::size_t(n);
-        for (int i = 0; i < n; ++i) {
-          out[i].facet = f;
-          if (request.internal_edges) {
-            const EdgeContact verdict = correct_internal_edge_contact(out[i], a, b, c, mesh.active_edges()[f]);
-            if (verdict == EdgeContact::discard) {
-              ++want.edge_discarded;
-              continue;
-            }
-            if (verdict == EdgeContact::corrected) ++want.edge_corrected;
-          }
-          contacts.push_back(out[i]);
-        }
+        keep_facet_contacts(mesh, request, f, out, n, want, contacts);
       }
       SCOPED_TRACE(testing::Message() << scene.name << " trial " << trial << " two_sided " << request.two_sided
                                       << " margin " << request.margin << " edges " << request.internal_edges);
-      EXPECT_EQ(result.counts.candidates, want.candidates);
-      EXPECT_EQ(result.counts.found, want.found);
-      EXPECT_EQ(result.counts.edge_corrected, want.edge_corrected);
-      EXPECT_EQ(result.counts.edge_discarded, want.edge_discarded);
-      const auto by_place = [](const ContactPoint& x, const ContactPoint& y) {
-        return std::make_tuple(x.position.x(), x.position.y(), x.position.z(), x.depth) <
-               std::make_tuple(y.position.x(), y.position.y(), y.position.z(), y.depth);
-      };
-      std::sort(contacts.begin(), contacts.end(), by_place);
-      const bool shared_place = std::adjacent_find(contacts.begin(), contacts.end(), [](const auto& x, const auto& y) {
-                                  return x.position == y.position;
-                                }) != contacts.end();
-      if (shared_place) continue;
-      std::vector<ContactPoint> got = result.contacts;
-      std::sort(got.begin(), got.end(), by_place);
-      ASSERT_EQ(got.size(), contacts.size());
-      for (std::size_t i = 0; i < got.size(); ++i) {
-        EXPECT_EQ(got[i].position, contacts[i].position);
-        EXPECT_EQ(got[i].normal, contacts[i].normal);
-        EXPECT_EQ(got[i].depth, contacts[i].depth);
-        EXPECT_EQ(got[i].facet, contacts[i].facet);
-        ++compared;
-      }
+      ASSERT_NO_FATAL_FAILURE(expect_same_as_per_facet(result, want, contacts, compared));
     }
   }
   // The scenes do make contacts, and candidates only the margin reaches (the counts scale with the
@@ -361,45 +378,11 @@ TEST(Collider, CapsuleCandidatesAndContactsAreThePerFacetRoutinesBitForBit) {
         degenerate += scene.name == "degenerate_soup" && f >= FacetId(kSoup);
         ContactPoint out[kMaxCapsuleTriangleContacts];
         const int k = contact_capsule_triangle(capsule, a, b, c, options, out);
-        want.found += std::size_t(k);
-        for (int i = 0; i < k; ++i) {
-          out[i].facet = f;
-          if (request.internal_edges) {
-            const EdgeContact verdict = correct_internal_edge_contact(out[i], a, b, c, mesh.active_edges()[f]);
-            if (verdict == EdgeContact::discard) {
-              ++want.edge_discarded;
-              continue;
-            }
-            if (verdict == EdgeContact::corrected) ++want.edge_corrected;
-          }
-          contacts.push_back(out[i]);
-        }
+        keep_facet_contacts(mesh, request, f, out, k, want, contacts);
       }
       SCOPED_TRACE(testing::Message() << scene.name << " trial " << trial << " two_sided " << request.two_sided
                                       << " margin " << request.margin << " edges " << request.internal_edges);
-      EXPECT_EQ(result.counts.candidates, want.candidates);
-      EXPECT_EQ(result.counts.found, want.found);
-      EXPECT_EQ(result.counts.edge_corrected, want.edge_corrected);
-      EXPECT_EQ(result.counts.edge_discarded, want.edge_discarded);
-      const auto by_place = [](const ContactPoint& x, const ContactPoint& y) {
-        return std::make_tuple(x.position.x(), x.position.y(), x.position.z(), x.depth) <
-               std::make_tuple(y.position.x(), y.position.y(), y.position.z(), y.depth);
-      };
-      std::sort(contacts.begin(), contacts.end(), by_place);
-      const bool shared_place = std::adjacent_find(contacts.begin(), contacts.end(), [](const auto& x, const auto& y) {
-                                  return x.position == y.position;
-                                }) != contacts.end();
-      if (shared_place) continue;
-      std::vector<ContactPoint> got = result.contacts;
-      std::sort(got.begin(), got.end(), by_place);
-      ASSERT_EQ(got.size(), contacts.size());
-      for (std::size_t i = 0; i < got.size(); ++i) {
-        EXPECT_EQ(got[i].position, contacts[i].position);
-        EXPECT_EQ(got[i].normal, contacts[i].normal);
-        EXPECT_EQ(got[i].depth, contacts[i].depth);
-        EXPECT_EQ(got[i].facet, contacts[i].facet);
-        ++compared;
-      }
+      ASSERT_NO_FATAL_FAILURE(expect_same_as_per_facet(result, want, contacts, compared));
     }
   }
   // The scenes do make contacts, candidates only the margin reaches, cores through facets and
