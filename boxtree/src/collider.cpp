@@ -281,8 +281,9 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPoints& hull, const Co
 namespace detail {
 
 // The input of one collide_convex call as bytes: the placement (the shape's numbers in the mesh's
-// frame, the request, the tree's identity, a hull's address and sizes) and a hull's arrays. Built
-// in per-thread storage, so that a warm call does not allocate.
+// frame, the request, a hull's address and sizes) and a hull's arrays; the mesh is the cache's
+// tree_ (a call on another tree clears the cache). Built in per-thread storage, so that a warm
+// call does not allocate.
 struct ConvexPairCacheAccess {
   std::vector<unsigned char>& placement;
   std::vector<unsigned char>& hull;
@@ -323,8 +324,7 @@ struct ConvexPairCacheAccess {
     add(t.translation);
   }
 
-  void add_request(const CollisionMesh& mesh, const ContactRequest& request) {
-    append(placement, mesh.tree().identity());
+  void add_request(const ContactRequest& request) {
     add(request.margin);
     append(placement, request.two_sided);
     append(placement, request.internal_edges);
@@ -407,8 +407,7 @@ struct ConvexPairCacheAccess {
     return {s.center - r, s.center + r};
   }
   static Aabb shape_box(const Obb& box, Real margin) {
-    const Vec3 r = box.axes.cwiseAbs() * (box.half_extents.array() + margin).matrix();
-    return {box.center - r, box.center + r};
+    return bounding_aabb(Obb{box.center, box.axes, (box.half_extents.array() + margin).matrix()});
   }
   static Aabb segment_shape_box(const Vec3& p0, const Vec3& p1, Real radius) {
     const Vec3 r = Vec3::Constant(radius);
@@ -446,7 +445,7 @@ struct ConvexPairCacheAccess {
     bool same_placement = false;
     if (still) {
       input.add_shape(shape);
-      input.add_request(mesh, request);
+      input.add_request(request);
       same_placement = c.placed_ && c.placement_ == input.placement;
       if (same_placement) input.add_hull(shape);
       if (same_placement && c.hull_copied_ && c.hull_ == input.hull) {
