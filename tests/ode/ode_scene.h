@@ -82,6 +82,17 @@ struct StepRecord {
   double collide_seconds = 0;
 };
 
+// Every body's position and rotation (ODE's 3 and 12 numbers), appended to a trace: one step of
+// the coherence tests' traces (support/traces.h).
+inline void append_body_states(const std::vector<dBodyID>& bodies, std::vector<dReal>& trace) {
+  for (dBodyID b : bodies) {
+    const dReal* p = dBodyGetPosition(b);
+    const dReal* r = dBodyGetRotation(b);
+    trace.insert(trace.end(), p, p + 3);
+    trace.insert(trace.end(), r, r + 12);
+  }
+}
+
 enum class Ground { ode_trimesh, boxtree };
 
 class DropWorld {

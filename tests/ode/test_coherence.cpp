@@ -10,6 +10,7 @@
 
 #include "boxtree/generate.h"
 #include "boxtree/ode/boxtree_geom.h"
+#include "ode_scene.h"
 #include "support/traces.h"
 
 namespace boxtree::ode_test {
@@ -73,12 +74,7 @@ struct Pile {
       dSpaceCollide(space, this, &near);
       dWorldQuickStep(world, 1.0 / 60);
       dJointGroupEmpty(contacts);
-      for (dBodyID b : bodies) {
-        const dReal* p = dBodyGetPosition(b);
-        const dReal* r = dBodyGetRotation(b);
-        trace.insert(trace.end(), p, p + 3);
-        trace.insert(trace.end(), r, r + 12);
-      }
+      append_body_states(bodies, trace);
     }
     return trace;
   }

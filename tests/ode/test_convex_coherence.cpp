@@ -100,12 +100,7 @@ struct RestingScene {
         ode::set_geom_settings(world.ground(), settings);
       }
       world.step();
-      for (dBodyID b : bodies) {
-        const dReal* p = dBodyGetPosition(b);
-        const dReal* r = dBodyGetRotation(b);
-        trace.insert(trace.end(), p, p + 3);
-        trace.insert(trace.end(), r, r + 12);
-      }
+      append_body_states(bodies, trace);
     }
     return trace;
   }
