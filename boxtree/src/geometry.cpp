@@ -622,7 +622,30 @@ bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c
     const Real t1 = m.dot(capsule.p1 - *corner[i]);
     if (t0 > 0 && t1 > 0 && std::min(t0 * t0, t1 * t1) > reach2 * m.squaredNorm()) return true;
   }
-  return false;
+  // Seen along the core: the corners' offsets across the core's line (r_i) keep the triangle's
+  // shadow out of the disk of the radius about the line (the point on no side of all three edges
+  // is inside the shadow).
+  const Vec3 w = capsule.p1 - capsule.p0;
+  const Real ww = w.squaredNorm();
+  if (!(ww > 0)) return false;
+  Vec3 r[3];
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 d = *corner[i] - capsule.p0;
+    r[i] = d - (d.dot(w) / ww) * w;
+  }
+  bool positive = true;
+  bool negative = true;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3& from = r[i];
+    const Vec3 edge = r[i == 2 ? 0 : i + 1] - from;
+    const Real turn = w.dot(from.cross(edge));
+    positive = positive && turn > 0;
+    negative = negative && turn < 0;
+    const Real length2 = edge.squaredNorm();
+    const Real t = length2 > 0 ? std::clamp(-from.dot(edge) / length2, Real(0), Real(1)) : Real(0);
+    if (!((from + t * edge).squaredNorm() > reach2)) return false;
+  }
+  return !(positive || negative);
 }
 
 }  // namespace
