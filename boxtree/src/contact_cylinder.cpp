@@ -196,16 +196,21 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   const Vec3 low = support(-n);
   const Real d0 = n.dot(tri.v[0] - low);
   if (d0 < limit) return -1;
-  const auto clearance = [&](const Vec3& foot) {
+  // Whether the in-plane distance from `foot` to every edge (inside) is at least `needed`; a NaN
+  // distance is passed over, as the least of them would pass it over. Most candidates fail at
+  // the first or second edge.
+  const auto clear_by = [&](const Vec3& foot, Real needed) {
     Real least = kInf;
     for (int i = 0; i < 3; ++i) {
       const Vec3 wall = inward_wall(tri, i);
-      least = std::min(least, wall.dot(foot - tri.v[i]) / wall.norm());
+      const Real distance = wall.dot(foot - tri.v[i]) / wall.norm();
+      if (distance < needed) return false;
+      least = std::min(least, distance);
     }
-    return least;
+    return least >= needed;
   };
   const Vec3 foot = low + d0 * n;
-  if (!(clearance(foot) >= std::max(d0, Real(0)))) return 0;
+  if (!clear_by(foot, std::max(d0, Real(0)))) return 0;
   if (one_sided && d0 > 0) {
     const Real along = w.dot(foot - p0);
     if (along >= 0 && along <= length && (foot - p0 - along * w).squaredNorm() <= radius * radius) return 1;
@@ -214,8 +219,8 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   }
   const Vec3 high = support(n);
   const Real height = n.dot(high - tri.v[0]);
-  const Real back = std::min(height, clearance(high - height * n));
-  return back >= (one_sided ? Real(0) : d0) ? 1 : 0;
+  const Real needed = one_sided ? Real(0) : d0;
+  return height >= needed && clear_by(high - height * n, needed) ? 1 : 0;
 }
 
 // The overlap along an arc of normals u = c a1 + s a2 (a1, a2 orthonormal) on which one corner or
