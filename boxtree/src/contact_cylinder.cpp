@@ -196,16 +196,21 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   const Vec3 low = support(-n);
   const Real d0 = n.dot(tri.v[0] - low);
   if (d0 < limit) return -1;
-  const auto clearance = [&](const Vec3& foot) {
+  // Whether the in-plane distance from `foot` to every edge (inside) is at least `needed`; a NaN
+  // distance is passed over, as the least of them would pass it over. Most candidates fail at
+  // the first or second edge.
+  const auto clear_by = [&](const Vec3& foot, Real needed) {
     Real least = kInf;
     for (int i = 0; i < 3; ++i) {
       const Vec3 wall = inward_wall(tri, i);
-      least = std::min(least, wall.dot(foot - tri.v[i]) / wall.norm());
+      const Real distance = wall.dot(foot - tri.v[i]) / wall.norm();
+      if (distance < needed) return false;
+      least = std::min(least, distance);
     }
-    return least;
+    return least >= needed;
   };
   const Vec3 foot = low + d0 * n;
-  if (!(clearance(foot) >= std::max(d0, Real(0)))) return 0;
+  if (!clear_by(foot, std::max(d0, Real(0)))) return 0;
   if (one_sided && d0 > 0) {
     const Real along = w.dot(foot - p0);
     if (along >= 0 && along <= length && (foot - p0 - along * w).squaredNorm() <= radius * radius) return 1;
@@ -214,8 +219,8 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   }
   const Vec3 high = support(n);
   const Real height = n.dot(high - tri.v[0]);
-  const Real back = std::min(height, clearance(high - height * n));
-  return back >= (one_sided ? Real(0) : d0) ? 1 : 0;
+  const Real needed = one_sided ? Real(0) : d0;
+  return height >= needed && clear_by(high - height * n, needed) ? 1 : 0;
 }
 
 // The overlap along an arc of normals u = c a1 + s a2 (a1, a2 orthonormal) on which one corner or
@@ -231,19 +236,19 @@ struct RimArc {
   Real w2 = 0;
   Real radius = 0;
 
-  Real side(const Vec2& u) const {
+  // g at u, and the support point there (the gradient of g extended homogeneously):
+  // q + r (u - (u.w) w)/side, side = sqrt(1 - (u.w)^2); where the shadow has a corner (side ~ 0:
+  // u is +-w, the shadow a segment), its centre q, a point of the shadow all the same (all that
+  // the bounds below need).
+  void value_and_support(const Vec2& u, Real& g, Vec2& x) const {
     const Real along = w1 * u.x() + w2 * u.y();
-    return std::sqrt(std::max(Real(0), 1 - along * along));
-  }
-  Real value(const Vec2& u) const { return q1 * u.x() + q2 * u.y() + radius * side(u); }
-  // The support point at u (the gradient of g extended homogeneously): q + r (u - (u.w) w)/side;
-  // where the shadow has a corner (side ~ 0: u is +-w, the shadow a segment), its centre q, a
-  // point of the shadow all the same (all that the bounds below need).
-  Vec2 support(const Vec2& u) const {
-    const Real along = w1 * u.x() + w2 * u.y();
-    const Real s = side(u);
-    if (!(s > 1e-9)) return {q1, q2};
-    return {q1 + radius * (u.x() - along * w1) / s, q2 + radius * (u.y() - along * w2) / s};
+    const Real side = std::sqrt(std::max(Real(0), 1 - along * along));
+    g = q1 * u.x() + q2 * u.y() + radius * side;
+    if (!(side > 1e-9)) {
+      x = Vec2(q1, q2);
+    } else {
+      x = Vec2(q1 + radius * (u.x() - along * w1) / side, q2 + radius * (u.y() - along * w2) / side);
+    }
   }
   // g and its first two derivatives along the arc (by angle) at unit u.
   void derivatives(const Vec2& u, Real& g, Real& g1, Real& g2) const {
@@ -287,7 +292,10 @@ void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real
   constexpr int kDepth = 4;
   Node stack[2 * kDepth + 2];
   int size = 0;
-  stack[size++] = Node{lo, hi, arc.value(lo), arc.value(hi), arc.support(lo), arc.support(hi), 0};
+  Node root{lo, hi, 0, 0, Vec2::Zero(), Vec2::Zero(), 0};
+  arc.value_and_support(lo, root.g_lo, root.x_lo);
+  arc.value_and_support(hi, root.g_hi, root.x_hi);
+  stack[size++] = root;
   while (size > 0) {
     const Node node = stack[--size];
     // The chord's bound: g >= u . x_lo up to the chord's normal u*, u . x_hi after it (the ends'
@@ -347,8 +355,9 @@ void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real
       consider(u);
       continue;
     }
-    const Vec2 x_middle = arc.support(middle);
-    const Real g_middle = arc.value(middle);
+    Real g_middle = 0;
+    Vec2 x_middle;
+    arc.value_and_support(middle, g_middle, x_middle);
     const Node left{node.lo, middle, node.g_lo, g_middle, node.x_lo, x_middle, node.depth + 1};
     const Node right{middle, node.hi, g_middle, node.g_hi, x_middle, node.x_hi, node.depth + 1};
     // The lower end first (popped first).
