@@ -47,13 +47,28 @@ void added_areas_2d(const Vec2* hull, int h, const Real* x, const Real* y, int n
   }
 }
 
+// The order std::sort(contacts, contacts + count, deeper first) leaves them in, as indices in
+// keys[0..count): std::sort's comparisons and moves depend only on the outcomes of earlier
+// comparisons, so sorting (depth, index) pairs with the same comparison moves every index to
+// where its contact would go, ties included, with 16-byte moves instead of 64-byte ones.
+struct DepthKey {
+  Real depth;
+  int index;
+};
+void sort_deepest_first(const ContactPoint* contacts, int count, DepthKey* keys) {
+  for (int i = 0; i < count; ++i) keys[i] = {contacts[i].depth, i};
+  std::sort(keys, keys + count, [](const DepthKey& x, const DepthKey& y) { return x.depth > y.depth; });
+}
+
 // Merges near-duplicates (same place within `merge_distance`, normals within ~10 degrees) of
-// contacts sorted deepest first; the deeper one (earlier) stays. Returns how many are kept, in
-// place and in order. A contact can only duplicate a kept one whose x lies within the merge
-// distance of its own, so the kept contacts are indexed in x order and each contact is tested
-// against that window only (O(n log n) for spread contacts instead of O(n * kept)); the window is
-// wider than the distance by more than rounding, so the test decides as the full scan does.
-int merge_near_duplicates(ContactPoint* contacts, int count, Real merge_distance) {
+// contacts[sorted[0].index], contacts[sorted[1].index], ... (deepest first); the deeper one
+// (earlier) stays. Writes the kept ones to `kept_out` in order and returns how many they are. A
+// contact can only duplicate a kept one whose x lies within the merge distance of its own, so the
+// kept contacts are indexed in x order and each contact is tested against that window only
+// (O(n log n) for spread contacts instead of O(n * kept)); the window is wider than the distance
+// by more than rounding, so the test decides as the full scan does.
+int merge_near_duplicates(const ContactPoint* contacts, const DepthKey* sorted, int count, Real merge_distance,
+                          ContactPoint* kept_out) {
   const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
   const Real merge_squared = merge_distance * merge_distance;
   const auto duplicates = [&](const ContactPoint& c, const ContactPoint& other) {
@@ -65,9 +80,10 @@ int merge_near_duplicates(ContactPoint* contacts, int count, Real merge_distance
   if (scan) {
     int kept = 0;
     for (int i = 0; i < count; ++i) {
+      const ContactPoint& c = contacts[sorted[i].index];
       bool duplicate = false;
-      for (int j = 0; j < kept && !duplicate; ++j) duplicate = duplicates(contacts[i], contacts[j]);
-      if (!duplicate) contacts[kept++] = contacts[i];
+      for (int j = 0; j < kept && !duplicate; ++j) duplicate = duplicates(c, kept_out[j]);
+      if (!duplicate) kept_out[kept++] = c;
     }
     return kept;
   }
@@ -78,17 +94,17 @@ int merge_near_duplicates(ContactPoint* contacts, int count, Real merge_distance
     large.resize(std::size_t(count));
     by_x = large.data();
   }
-  const auto x_of = [contacts](int k) { return contacts[k].position.x(); };
+  const auto x_of = [kept_out](int k) { return kept_out[k].position.x(); };
   int kept = 0;
   for (int i = 0; i < count; ++i) {
-    const ContactPoint c = contacts[i];
+    const ContactPoint& c = contacts[sorted[i].index];
     const Real x = c.position.x();
     const Real window = merge_distance * (1 + 1e-9) + 1e-15 * std::abs(x);
     int* p = std::lower_bound(by_x, by_x + kept, x - window, [&](int k, Real v) { return x_of(k) < v; });
     bool duplicate = false;
-    for (; p != by_x + kept && x_of(*p) <= x + window && !duplicate; ++p) duplicate = duplicates(c, contacts[*p]);
+    for (; p != by_x + kept && x_of(*p) <= x + window && !duplicate; ++p) duplicate = duplicates(c, kept_out[*p]);
     if (duplicate) continue;
-    contacts[kept] = c;
+    kept_out[kept] = c;
     int* at = std::upper_bound(by_x, by_x + kept, x, [&](Real v, int k) { return v < x_of(k); });
     std::copy_backward(at, by_x + kept, by_x + kept + 1);
     *at = kept++;
@@ -101,8 +117,16 @@ int merge_near_duplicates(ContactPoint* contacts, int count, Real merge_distance
 int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance, int* merged) {
   if (merged) *merged = 0;
   if (count <= 0) return 0;
-  std::sort(contacts, contacts + count, [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
-  const int kept = merge_near_duplicates(contacts, count, merge_distance);
+  // Per thread, so that a warm call does not allocate: the sorted keys and the kept contacts.
+  thread_local std::vector<DepthKey> keys;
+  thread_local std::vector<ContactPoint> kept_contacts;
+  if (keys.size() < std::size_t(count)) {
+    keys.resize(std::size_t(count));
+    kept_contacts.resize(std::size_t(count));
+  }
+  sort_deepest_first(contacts, count, keys.data());
+  const int kept = merge_near_duplicates(contacts, keys.data(), count, merge_distance, kept_contacts.data());
+  std::copy(kept_contacts.begin(), kept_contacts.begin() + kept, contacts);
   if (merged) *merged = count - kept;
   if (kept <= max_count) return kept;
 
@@ -166,11 +190,13 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
     area = 0;
     for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[i + 1 == h ? 0 : i + 1]);
   }
-  std::array<ContactPoint, 64> result;
-  for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];
-  std::sort(result.begin(), result.begin() + selected,
-            [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
-  std::copy(result.begin(), result.begin() + selected, contacts);
+  // The chosen ones, deepest first: sorted as std::sort would sort contacts[order[0]],
+  // contacts[order[1]], ...
+  std::array<ContactPoint, 64> chosen_contacts;
+  for (int s = 0; s < selected; ++s) chosen_contacts[s] = contacts[order[s]];
+  std::array<DepthKey, 64> chosen_keys;
+  sort_deepest_first(chosen_contacts.data(), selected, chosen_keys.data());
+  for (int s = 0; s < selected; ++s) contacts[s] = chosen_contacts[chosen_keys[s].index];
   return selected;
 }
 
