@@ -8,6 +8,10 @@
 #include <cmath>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "boxtree/contact.h"
 #include "contact_internal.h"
 #include "internal.h"
@@ -25,9 +29,9 @@ Real cross_2d(const Vec2& o, const Vec2& a, const Vec2& b) {
 // (counter-clockwise, h vertices; a segment or a point when h < 3), in added[i]: the triangles
 // from the candidate to the edges that face it, i.e. the sum over the hull's edges (o, b), in
 // their order, of -c for the cross products c = (b.x - o.x) (q.y - o.y) - (b.y - o.y) (q.x - o.x)
-// that are negative. Each loop runs over the candidates without a branch, so that it vectorizes:
-// an edge that does not face the candidate (c >= 0, or NaN) adds +0, which leaves the sum as it
-// is.
+// that are negative. Each loop runs over the candidates without a branch, two at a time with
+// SSE2: an edge that does not face the candidate (c >= 0, or NaN) adds +0, which leaves the sum
+// as it is.
 void added_areas_2d(const Vec2* hull, int h, const Real* x, const Real* y, int n, Real* added) {
   std::fill(added, added + n, Real(0));
   if (h == 1) return;
@@ -40,7 +44,24 @@ void added_areas_2d(const Vec2* hull, int h, const Real* x, const Real* y, int n
       for (int i = 0; i < n; ++i) added[i] = std::abs(ex * (y[i] - o.y()) - ey * (x[i] - o.x()));
       return;
     }
-    for (int i = 0; i < n; ++i) {
+    int i = 0;
+#if defined(__SSE2__)
+    // Two candidates per instruction (GCC does not vectorize the loop at -O2), with the same
+    // operations: maxpd(v, 0) is v > 0 ? v : 0, which is std::max(Real(0), v) (+0 for a NaN or
+    // a -0 in both), and flipping the sign bit is the negation.
+    const __m128d ex2 = _mm_set1_pd(ex);
+    const __m128d ey2 = _mm_set1_pd(ey);
+    const __m128d ox = _mm_set1_pd(o.x());
+    const __m128d oy = _mm_set1_pd(o.y());
+    const __m128d sign = _mm_set1_pd(Real(-0.0));
+    for (; i + 1 < n; i += 2) {
+      const __m128d c = _mm_sub_pd(_mm_mul_pd(ex2, _mm_sub_pd(_mm_loadu_pd(y + i), oy)),
+                                   _mm_mul_pd(ey2, _mm_sub_pd(_mm_loadu_pd(x + i), ox)));
+      const __m128d facing = _mm_max_pd(_mm_xor_pd(c, sign), _mm_setzero_pd());
+      _mm_storeu_pd(added + i, _mm_add_pd(_mm_loadu_pd(added + i), facing));
+    }
+#endif
+    for (; i < n; ++i) {
       const Real c = ex * (y[i] - o.y()) - ey * (x[i] - o.x());
       added[i] += std::max(Real(0), -c);  // x - c is x + (-c)
     }
