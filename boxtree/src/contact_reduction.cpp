@@ -81,15 +81,18 @@ void sort_deepest_first(const ContactPoint* contacts, int count, DepthKey* keys)
   std::sort(keys, keys + count, [](const DepthKey& x, const DepthKey& y) { return x.depth > y.depth; });
 }
 
+const auto deeper_first = [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; };
+
 // Merges near-duplicates (same place within `merge_distance`, normals within ~10 degrees) of
-// contacts[sorted[0].index], contacts[sorted[1].index], ... (deepest first); the deeper one
-// (earlier) stays. Writes the kept ones to `kept_out` in order and returns how many they are. A
-// contact can only duplicate a kept one whose x lies within the merge distance of its own, so the
-// kept contacts are indexed in x order and each contact is tested against that window only
-// (O(n log n) for spread contacts instead of O(n * kept)); the window is wider than the distance
-// by more than rounding, so the test decides as the full scan does.
-int merge_near_duplicates(const ContactPoint* contacts, const DepthKey* sorted, int count, Real merge_distance,
-                          ContactPoint* kept_out) {
+// sorted(0), sorted(1), ... sorted(count - 1) (deepest first); the deeper one (earlier) stays.
+// Writes the kept ones to `kept_out` in order and returns how many they are; kept_out may be the
+// array sorted(i) reads at index i (its position k is written after sorted(k) is read). A contact
+// can only duplicate a kept one whose x lies within the merge distance of its own, so the kept
+// contacts are indexed in x order and each contact is tested against that window only (O(n log n)
+// for spread contacts instead of O(n * kept)); the window is wider than the distance by more than
+// rounding, so the test decides as the full scan does.
+template <class Sorted>
+int merge_near_duplicates(const Sorted& sorted, int count, Real merge_distance, ContactPoint* kept_out) {
   const Real cos_merge = std::cos(Real(10) * Real(3.14159265358979323846) / 180);
   const Real merge_squared = merge_distance * merge_distance;
   const auto duplicates = [&](const ContactPoint& c, const ContactPoint& other) {
@@ -97,11 +100,11 @@ int merge_near_duplicates(const ContactPoint* contacts, const DepthKey* sorted, 
   };
   // Few contacts, or no order to index by: the full scan.
   bool scan = count <= 32 || !std::isfinite(merge_squared);
-  for (int i = 0; i < count && !scan; ++i) scan = !std::isfinite(contacts[i].position.x());
+  for (int i = 0; i < count && !scan; ++i) scan = !std::isfinite(sorted(i).position.x());
   if (scan) {
     int kept = 0;
     for (int i = 0; i < count; ++i) {
-      const ContactPoint& c = contacts[sorted[i].index];
+      const ContactPoint& c = sorted(i);
       bool duplicate = false;
       for (int j = 0; j < kept && !duplicate; ++j) duplicate = duplicates(c, kept_out[j]);
       if (!duplicate) kept_out[kept++] = c;
@@ -118,7 +121,7 @@ int merge_near_duplicates(const ContactPoint* contacts, const DepthKey* sorted, 
   const auto x_of = [kept_out](int k) { return kept_out[k].position.x(); };
   int kept = 0;
   for (int i = 0; i < count; ++i) {
-    const ContactPoint& c = contacts[sorted[i].index];
+    const ContactPoint& c = sorted(i);
     const Real x = c.position.x();
     const Real window = merge_distance * (1 + 1e-9) + 1e-15 * std::abs(x);
     int* p = std::lower_bound(by_x, by_x + kept, x - window, [&](int k, Real v) { return x_of(k) < v; });
@@ -138,16 +141,26 @@ int merge_near_duplicates(const ContactPoint* contacts, const DepthKey* sorted, 
 int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge_distance, int* merged) {
   if (merged) *merged = 0;
   if (count <= 0) return 0;
-  // Per thread, so that a warm call does not allocate: the sorted keys and the kept contacts.
-  thread_local std::vector<DepthKey> keys;
-  thread_local std::vector<ContactPoint> kept_contacts;
-  if (keys.size() < std::size_t(count)) {
-    keys.resize(std::size_t(count));
-    kept_contacts.resize(std::size_t(count));
+  int kept = 0;
+  if (count <= 16) {
+    // A narrowphase's few contacts: sorted as they are (keys would cost more than they save).
+    std::sort(contacts, contacts + count, deeper_first);
+    kept = merge_near_duplicates([contacts](int i) -> const ContactPoint& { return contacts[i]; }, count,
+                                 merge_distance, contacts);
+  } else {
+    // Per thread, so that a warm call does not allocate: the sorted keys and the kept contacts.
+    thread_local std::vector<DepthKey> keys;
+    thread_local std::vector<ContactPoint> kept_contacts;
+    if (keys.size() < std::size_t(count)) {
+      keys.resize(std::size_t(count));
+      kept_contacts.resize(std::size_t(count));
+    }
+    sort_deepest_first(contacts, count, keys.data());
+    const DepthKey* sorted = keys.data();
+    kept = merge_near_duplicates([contacts, sorted](int i) -> const ContactPoint& { return contacts[sorted[i].index]; },
+                                 count, merge_distance, kept_contacts.data());
+    std::copy(kept_contacts.begin(), kept_contacts.begin() + kept, contacts);
   }
-  sort_deepest_first(contacts, count, keys.data());
-  const int kept = merge_near_duplicates(contacts, keys.data(), count, merge_distance, kept_contacts.data());
-  std::copy(kept_contacts.begin(), kept_contacts.begin() + kept, contacts);
   if (merged) *merged = count - kept;
   if (kept <= max_count) return kept;
 
@@ -211,13 +224,10 @@ int reduce_in_place(ContactPoint* contacts, int count, int max_count, Real merge
     area = 0;
     for (int i = 0; h >= 3 && i < h; ++i) area += cross_2d(hull[0], hull[i], hull[i + 1 == h ? 0 : i + 1]);
   }
-  // The chosen ones, deepest first: sorted as std::sort would sort contacts[order[0]],
-  // contacts[order[1]], ...
-  std::array<ContactPoint, 64> chosen_contacts;
-  for (int s = 0; s < selected; ++s) chosen_contacts[s] = contacts[order[s]];
-  std::array<DepthKey, 64> chosen_keys;
-  sort_deepest_first(chosen_contacts.data(), selected, chosen_keys.data());
-  for (int s = 0; s < selected; ++s) contacts[s] = chosen_contacts[chosen_keys[s].index];
+  std::array<ContactPoint, 64> result;
+  for (int s = 0; s < selected; ++s) result[s] = contacts[order[s]];
+  std::sort(result.begin(), result.begin() + selected, deeper_first);
+  std::copy(result.begin(), result.begin() + selected, contacts);
   return selected;
 }
 
