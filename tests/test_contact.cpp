@@ -861,6 +861,33 @@ TEST(ContactReduce, MergeOfManyContactsIsThePairwiseScans) {
   EXPECT_LT(merged, borderline);      // and not all of them
 }
 
+// Equal depths (a box resting on a flat terrain: every corner at the same depth) come out of
+// reduce_contacts in the order std::sort by depth leaves the contacts in: the reduction sorts
+// (depth, index) keys instead of the contacts, and its callers' results depend on that order.
+TEST(ContactReduce, TiesComeInTheOrderOfSortingTheContacts) {
+  Random rng(58);
+  for (int trial = 0; trial < scaled(300); ++trial) {
+    const int count = rng.integer(1, 200);
+    std::vector<ContactPoint> contacts;
+    for (int i = 0; i < count; ++i) {
+      ContactPoint c;
+      c.position = Vec3(Real(i), 0, 0);  // far apart: nothing merges
+      c.depth = Real(rng.integer(0, 3)) * Real(0.01);
+      c.facet = FacetId(i);
+      contacts.push_back(c);
+    }
+    std::vector<ContactPoint> expected = contacts;
+    std::sort(expected.begin(), expected.end(),
+              [](const ContactPoint& x, const ContactPoint& y) { return x.depth > y.depth; });
+    std::vector<ContactPoint> got = contacts;
+    reduce_contacts(got, std::size_t(count), 0);
+    ASSERT_EQ(got.size(), expected.size()) << trial;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].facet, expected[i].facet) << trial << " " << i;
+    }
+  }
+}
+
 // ------------------------------------------------------------------------------------------
 // Randomized cross-checks against the exact overlap tests
 

@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "boxtree/geometry.h"
+#include "internal.h"
 
 namespace boxtree {
 namespace {
@@ -107,7 +108,9 @@ EdgeContact InternalEdgeCorrection::operator()(ContactPoint& contact) const {
   // size. The feature is the triangle's point closest to the shape's deepest point: for a
   // separated contact the routines' position may be anywhere on the touching patch, while the
   // closest point tells whether the shape is over this facet or beside it.
-  const Vec3 feature = closest_point_on_triangle(contact.point_on_shape(), *corners_[0], *corners_[1], *corners_[2]);
+  const Vec3 feature = detail::closest_point_on_triangle_with_edges(
+      contact.point_on_shape(), *corners_[0], *corners_[1], *corners_[2], edges_[0], edges_[1], edges_[2],
+      edge_squared_[0], edge_squared_[1], edge_squared_[2]);
   // A penetrating shape's deepest point is inside the triangle by up to the depth: an edge
   // contact of a shape just crossing the edge still counts as on the edge.
   const Real tolerance = scale_ * Real(1e-6) + std::max(contact.depth, Real(0));

@@ -740,15 +740,25 @@ bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const P
 // Distances
 
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a;
+  const Vec3 bc = c - b;
+  const Vec3 ca = a - c;
+  return detail::closest_point_on_triangle_with_edges(p, a, b, c, ab, bc, ca, ab.squaredNorm(), bc.squaredNorm(),
+                                                      ca.squaredNorm());
+}
+
+// Negating a difference is exact (c - a is -(a - c) to the bit, and so are their squared norms),
+// so the edges in either direction come from the three given ones.
+Vec3 detail::closest_point_on_triangle_with_edges(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                                                  const Vec3& ab, const Vec3& bc, const Vec3& ca, Real ab_squared,
+                                                  Real bc_squared, Real ca_squared) {
   // Ericson, Real-Time Collision Detection, 5.1.5: vertex regions by dot products, then edge
   // regions and the interior by barycentric numerators. The numerators are taken in the book's
   // first, cross-product form n . ((a - p) x (b - p)) rather than its Lagrange-identity rewrite,
   // which cancels catastrophically on thin triangles; and the interior point is the projection of
   // p on the plane rather than the barycentric combination, whose position along a needle
   // triangle is only known to ~eps * L^2 / width.
-  const Vec3 ab = b - a;
-  const Vec3 ac = c - a;
-  const Vec3 bc = c - b;
+  const Vec3 ac = -ca;
   const Vec3 n = ab.cross(ac);
   const auto closest_on_edges = [&] {
     const Vec3 q0 = closest_point_on_segment(p, a, b);
@@ -762,18 +772,18 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
   // Degenerate (zero normal) or a needle narrower than 1e-8 of its longest edge L (|n| = L *
   // width): the triangle is its edges to within that width, which is also about the accuracy the
   // region tests below would have (eps * L / width), so take the edges.
-  const Real longest_squared = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
+  const Real longest_squared = std::max({ab_squared, ca_squared, bc_squared});
   const Real normal_squared = n.squaredNorm();
   if (!(normal_squared > Real(1e-16) * longest_squared * longest_squared)) return closest_on_edges();
 
   // Parametric positions of p along the edges, from each end.
   const Real snom = (p - a).dot(ab);
-  const Real sdenom = (p - b).dot(a - b);
+  const Real sdenom = (p - b).dot(-ab);
   const Real tnom = (p - a).dot(ac);
-  const Real tdenom = (p - c).dot(a - c);
+  const Real tdenom = (p - c).dot(ca);
   if (snom <= 0 && tnom <= 0) return a;
   const Real unom = (p - b).dot(bc);
-  const Real udenom = (p - c).dot(b - c);
+  const Real udenom = (p - c).dot(-bc);
   if (sdenom <= 0 && unom <= 0) return b;
   if (tdenom <= 0 && udenom <= 0) return c;
 

@@ -41,6 +41,13 @@ class ObbTriangleTest {
   bool valid_;
 };
 
+// closest_point_on_triangle (geometry.h) given the triangle's edges ab = b - a, bc = c - b,
+// ca = a - c and their squaredNorm()s, for callers that have them (one facet, many points): the
+// same point, bit for bit. Defined in geometry.cpp.
+Vec3 closest_point_on_triangle_with_edges(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& ab,
+                                          const Vec3& bc, const Vec3& ca, Real ab_squared, Real bc_squared,
+                                          Real ca_squared);
+
 // A pair of points, one on a segment and one on a triangle, and their squared distance.
 struct SegmentTrianglePair {
   Vec3 on_segment = Vec3::Zero();
