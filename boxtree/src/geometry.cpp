@@ -589,13 +589,14 @@ bool triangle_overlaps_sphere(const Vec3& a, const Vec3& b, const Vec3& c, const
 namespace {
 
 // A quick rejection for triangle_overlaps_capsule, which most of a query's leaf tests end in:
-// planes that separate the triangle from the capsule. A well-shaped triangle lies on the inner
-// side of its own plane (either side) and of the three planes through an edge perpendicular to
-// it; the capsule is apart when both ends of its core lie beyond one of them by more than the
-// radius. The radius is taken larger (squared: by 4e-9 of r^2 and 2e-9 of the squared size of
-// the triangle and of the ends' offsets), far above the rounding of these products, so a capsule
-// that touches the triangle is never rejected here (the exact distance decides). Needles and
-// degenerate triangles (whose computed normal may point anywhere) are left to the distance.
+// planes that separate the triangle from the capsule, then the triangle's shadow along the core.
+// A well-shaped triangle lies on the inner side of its own plane (either side) and of the three
+// planes through an edge perpendicular to it; the capsule is apart when both ends of its core lie
+// beyond one of them by more than the radius. The radius is taken larger (squared: by 4e-9 of r^2
+// and 2e-9 of the squared size of the triangle and of the ends' offsets), far above the rounding
+// of these products, so a capsule that touches the triangle is never rejected here (the exact
+// distance decides). Needles and degenerate triangles (whose computed normal may point anywhere)
+// are left to the distance.
 Real segment_triangle_distance_squared_until(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
                                              const Vec3& c, Real enough);  // Distances, below
 
@@ -622,9 +623,11 @@ bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c
     const Real t1 = m.dot(capsule.p1 - *corner[i]);
     if (t0 > 0 && t1 > 0 && std::min(t0 * t0, t1 * t1) > reach2 * m.squaredNorm()) return true;
   }
-  // Seen along the core: the corners' offsets across the core's line (r_i) keep the triangle's
-  // shadow out of the disk of the radius about the line (the point on no side of all three edges
-  // is inside the shadow).
+  // The triangle seen along the core: projected across the core's line (the corners' offsets
+  // r_i from it), its shadow stays out of the disk of the (enlarged) radius about the line. The
+  // projection shortens every distance, so the capsule is then apart; the line's point is inside
+  // the shadow when it is on one side of all three edges. This settles the facets beside a
+  // capsule lying on a surface, which the planes above do not.
   const Vec3 w = capsule.p1 - capsule.p0;
   const Real ww = w.squaredNorm();
   if (!(ww > 0)) return false;
