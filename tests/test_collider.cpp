@@ -469,6 +469,38 @@ TEST(Collider, EngineContactsBeyondTheMarginDoNotComeBack) {
   EXPECT_GT(contacts, 100u);
 }
 
+// The facets that the collider proves out of reach before an engine's narrowphase (along the
+// facet's normal, and along the direction from the shape's box to the facet) give no contact:
+// with margins as wide as the shapes, so that many facets lie near the reach, every contact the
+// narrowphase makes on any facet within the margin comes back, as from the same routine run on
+// every facet.
+TEST(Collider, EngineNarrowphaseSeesEveryFacetWithinTheMargin) {
+  Random random(29);
+  std::size_t near_the_reach = 0;
+  for (const Scene& scene : scenes()) {
+    const CollisionMesh& mesh = *scene.mesh;
+    for (int trial = 0; trial < test::scaled(150); ++trial) {
+      const Real s = scene.size * random.uniform(0.3, 1.0);
+      const Obb box{near_surface(mesh.mesh(), random, s), random.rotation(), Vec3(0.5, 0.4, 0.3) * s};
+      auto support = [&box](const Vec3& d) { return obb_support(box, d); };
+      const auto per_facet = [&box](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o,
+                                    ContactPoint* out) { return contact_box_triangle(box, a, b, c, o, out); };
+      ContactRequest request;
+      request.two_sided = true;  // the engine path's own options: the same routine on both sides
+      request.margin = random.uniform(0.2, 1.0) * s;
+      request.internal_edges = random.chance(0.5);
+      request.max_contacts = kAll;
+      ContactResult result;
+      collide_convex(mesh, SupportShape{support, box.center, box, true}, per_facet, request, result);
+      const auto want = brute_convex(mesh, request, per_facet);
+      SCOPED_TRACE(testing::Message() << scene.name << " trial " << trial << " margin " << request.margin);
+      ASSERT_NO_FATAL_FAILURE(expect_same_contacts(result.contacts, want, mesh.mesh()));
+      for (const ContactPoint& c : want) near_the_reach += c.depth < -0.8 * request.margin;
+    }
+  }
+  EXPECT_GT(near_the_reach, std::size_t(test::scaled(200)));
+}
+
 // The reduction keeps the deepest contact and says what went; early_stop stops at the count.
 TEST(Collider, ReductionKeepsTheDeepestAndCountsWhatWent) {
   const auto mesh = CollisionMesh::build(std::make_shared<TriangleMesh>(make_terrain(8, 8, 1, 8, 0)), Method{});
