@@ -196,18 +196,16 @@ int flat_contact_is_least(const Vec3& p0, const Vec3& w, Real length, Real radiu
   const Vec3 low = support(-n);
   const Real d0 = n.dot(tri.v[0] - low);
   if (d0 < limit) return -1;
-  // Whether the in-plane distance from `foot` to every edge (inside) is at least `needed`; a NaN
-  // distance is passed over, as the least of them would pass it over. Most candidates fail at
-  // the first or second edge.
+  // Whether the in-plane distance from `foot` to every edge (inside) is at least `needed`: never
+  // for a NaN `needed`; a NaN distance is passed over, as the least of them would pass it over.
+  // Most candidates fail at the first or second edge.
   const auto clear_by = [&](const Vec3& foot, Real needed) {
-    Real least = kInf;
+    if (std::isnan(needed)) return false;
     for (int i = 0; i < 3; ++i) {
       const Vec3 wall = inward_wall(tri, i);
-      const Real distance = wall.dot(foot - tri.v[i]) / wall.norm();
-      if (distance < needed) return false;
-      least = std::min(least, distance);
+      if (wall.dot(foot - tri.v[i]) / wall.norm() < needed) return false;
     }
-    return least >= needed;
+    return true;
   };
   const Vec3 foot = low + d0 * n;
   if (!clear_by(foot, std::max(d0, Real(0)))) return 0;
@@ -371,33 +369,6 @@ void rim_arc_least(const RimArc& arc, const Vec2& lo, const Vec2& hi, const Real
   }
 }
 
-// Whether the shadow of a triangle along the cylinder's axis (corners x[i], y[i] in a frame of
-// the plane across the axis, about the axis's point there) stays farther than `reach` from that
-// point: then the triangle and the cylinder (whose shadow is the disk of its radius about the
-// point) are apart along the direction between the nearest points of the two shadows by the
-// distance minus the radius. Point-to-segment distances for the edges; the point inside the
-// shadow (the three edges' cross products of one sign) is at distance zero.
-bool shadow_beyond(const Real (&x)[3], const Real (&y)[3], Real reach) {
-  const Real reach_squared = reach * reach;
-  bool positive = true;
-  bool negative = true;
-  for (int i = 0; i < 3; ++i) {
-    const int j = i == 2 ? 0 : i + 1;
-    const Real ex = x[j] - x[i];
-    const Real ey = y[j] - y[i];
-    // The point (the origin) against the edge from corner i to corner j.
-    const Real cross = ex * y[i] - ey * x[i];
-    positive = positive && cross > 0;
-    negative = negative && cross < 0;
-    const Real length_squared = ex * ex + ey * ey;
-    const Real t = length_squared > 0 ? std::clamp(-(x[i] * ex + y[i] * ey) / length_squared, Real(0), Real(1)) : 0;
-    const Real dx = x[i] + t * ex;
-    const Real dy = y[i] + t * ey;
-    if (!(dx * dx + dy * dy > reach_squared)) return false;
-  }
-  return !(positive || negative);
-}
-
 }  // namespace
 
 detail::CylinderTriangleContacts::CylinderTriangleContacts(const Vec3& p0, const Vec3& p1, Real radius)
@@ -462,7 +433,8 @@ int detail::CylinderTriangleContacts::operator()(const Vec3& a, const Vec3& b, c
       x[i] = across0_.dot(d);
       y[i] = across1_.dot(d);
     }
-    if (shadow_beyond(x, y, radius - limit + tolerance(size, std::max(tri.coord, coord_)))) return 0;
+    const Real reach = radius - limit + tolerance(size, std::max(tri.coord, coord_));
+    if (detail::origin_beyond_triangle_2d(x, y, reach * reach)) return 0;
   }
   Real pushed_depth = 0;
   Vec3 pushed_point = Vec3::Zero();

@@ -623,32 +623,22 @@ bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c
     const Real t1 = m.dot(capsule.p1 - *corner[i]);
     if (t0 > 0 && t1 > 0 && std::min(t0 * t0, t1 * t1) > reach2 * m.squaredNorm()) return true;
   }
-  // The triangle seen along the core: projected across the core's line (the corners' offsets
-  // r_i from it), its shadow stays out of the disk of the (enlarged) radius about the line. The
-  // projection shortens every distance, so the capsule is then apart; the line's point is inside
-  // the shadow when it is on one side of all three edges. This settles the facets beside a
-  // capsule lying on a surface, which the planes above do not.
+  // The triangle seen along the core: its shadow out of the disk of the (enlarged) radius about
+  // the core's line. This settles the facets beside a capsule lying on a surface, which the planes
+  // above do not.
   const Vec3 w = capsule.p1 - capsule.p0;
-  const Real ww = w.squaredNorm();
-  if (!(ww > 0)) return false;
-  Vec3 r[3];
+  const Real length = w.norm();
+  if (!(length > 0)) return false;
+  Vec3 across0, across1;
+  detail::orthonormal_completion(w / length, across0, across1);
+  Real x[3];
+  Real y[3];
   for (int i = 0; i < 3; ++i) {
     const Vec3 d = *corner[i] - capsule.p0;
-    r[i] = d - (d.dot(w) / ww) * w;
+    x[i] = across0.dot(d);
+    y[i] = across1.dot(d);
   }
-  bool positive = true;
-  bool negative = true;
-  for (int i = 0; i < 3; ++i) {
-    const Vec3& from = r[i];
-    const Vec3 edge = r[i == 2 ? 0 : i + 1] - from;
-    const Real turn = w.dot(from.cross(edge));
-    positive = positive && turn > 0;
-    negative = negative && turn < 0;
-    const Real length2 = edge.squaredNorm();
-    const Real t = length2 > 0 ? std::clamp(-from.dot(edge) / length2, Real(0), Real(1)) : Real(0);
-    if (!((from + t * edge).squaredNorm() > reach2)) return false;
-  }
-  return !(positive || negative);
+  return detail::origin_beyond_triangle_2d(x, y, reach2);
 }
 
 }  // namespace
@@ -737,6 +727,26 @@ bool triangle_crosses_plane(const Vec3& a, const Vec3& b, const Vec3& c, const P
   const Real db = plane.signed_distance_scaled(b);
   const Real dc = plane.signed_distance_scaled(c);
   return std::min({da, db, dc}) <= 0 && std::max({da, db, dc}) >= 0;
+}
+
+bool detail::origin_beyond_triangle_2d(const Real (&x)[3], const Real (&y)[3], Real reach_squared) {
+  bool positive = true;
+  bool negative = true;
+  for (int i = 0; i < 3; ++i) {
+    const int j = i == 2 ? 0 : i + 1;
+    const Real ex = x[j] - x[i];
+    const Real ey = y[j] - y[i];
+    // The origin against the edge from corner i to corner j.
+    const Real cross = ex * y[i] - ey * x[i];
+    positive = positive && cross > 0;
+    negative = negative && cross < 0;
+    const Real length_squared = ex * ex + ey * ey;
+    const Real t = length_squared > 0 ? std::clamp(-(x[i] * ex + y[i] * ey) / length_squared, Real(0), Real(1)) : 0;
+    const Real dx = x[i] + t * ex;
+    const Real dy = y[i] + t * ey;
+    if (!(dx * dx + dy * dy > reach_squared)) return false;
+  }
+  return !(positive || negative);
 }
 
 // ---------------------------------------------------------------------------------------------

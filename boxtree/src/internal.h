@@ -41,6 +41,15 @@ class ObbTriangleTest {
   bool valid_;
 };
 
+// Whether the origin of a plane lies farther than sqrt(reach_squared) from the triangle with
+// corners (x[i], y[i]) there: the test of a triangle's shadow along an axis (its corners in a frame
+// of the plane across the axis, about the axis's point) against the disk of a radius about the
+// axis, where a cylinder's side or a capsule's core grown by its radius casts its shadow. Apart,
+// the two shapes are apart along the direction between the nearest points of the two shadows.
+// Point-to-segment distances for the edges; the origin on one side of all three edges (their
+// cross products of one sign) is inside, at distance zero. Defined in geometry.cpp.
+bool origin_beyond_triangle_2d(const Real (&x)[3], const Real (&y)[3], Real reach_squared);
+
 // closest_point_on_triangle (geometry.h) given the triangle's edges ab = b - a, bc = c - b,
 // ca = a - c and their squaredNorm()s, for callers that have them (one facet, many points): the
 // same point, bit for bit. Defined in geometry.cpp.
