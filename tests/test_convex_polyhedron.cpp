@@ -496,5 +496,45 @@ TEST(ContactPolyhedron, ColumnsGiveTheSameContactsAsThePerElementLoops) {
   EXPECT_GT(contacts, compared / 4);  // most cases touch: the comparison covers the contact paths
 }
 
+// A hull of 64 corners pushed through a one-sided triangle wide enough to hold its shadow: every
+// corner is over the triangle, more than the narrowphase's scratch holds, and the deepest contact
+// must still be the directional depth (the plane's height over the lowest corner) whichever
+// corner of the triangle comes first. (The scratch used to keep the first 48 candidates in the
+// order they came, so the depth depended on the corners' numbering.)
+TEST(ContactPolyhedron, AHullDeepUnderAWideTriangleKeepsItsDeepestCorner) {
+  test::Random rng(79);
+  int checked = 0;
+  for (int hull_index = 0; hull_index < scaled(20); ++hull_index) {
+    std::vector<Vec3> points;
+    for (int i = 0; i < 64; ++i) points.push_back(rng.unit_vector().cwiseProduct(Vec3(0.5, 0.4, 0.3)));
+    const ConvexPolyhedron hull = make_convex_polyhedron(points, brute_force_hull(points));
+    for (int trial = 0; trial < 10; ++trial) {
+      const Vec3 normal = (Vec3(0, 0, 1) + rng.point(-0.3, 0.3)).normalized();
+      const Vec3 u = normal.cross(Vec3::UnitX()).normalized();
+      const Vec3 w = normal.cross(u);
+      const Real height = rng.uniform(-0.2, 0.2);  // the hull's centre behind the plane or just in front
+      const Vec3 base = -height * normal;
+      const std::array<Vec3, 3> t = {base + 4 * u - 3 * w, base + 4 * w, base - 4 * u - 3 * w};
+      ASSERT_GT((t[1] - t[0]).cross(t[2] - t[0]).dot(normal), 0);
+      Real lowest = std::numeric_limits<Real>::infinity();
+      for (const Vec3& p : points) lowest = std::min(lowest, normal.dot(p));
+      const Real depth = normal.dot(t[0]) - lowest;
+      ContactOptions options;
+      options.two_sided = false;
+      for (int first = 0; first < 3; ++first) {
+        ContactPoint out[kMaxPolyhedronTriangleContacts];
+        const int n = contact_polyhedron_triangle(hull, t[std::size_t(first)], t[std::size_t((first + 1) % 3)],
+                                                  t[std::size_t((first + 2) % 3)], options, out);
+        SCOPED_TRACE(testing::Message() << hull_index << " " << trial << " " << first);
+        ASSERT_GT(n, 0);
+        EXPECT_LE((out[0].normal - normal).norm(), 1e-9);
+        EXPECT_NEAR(out[0].depth, depth, 1e-9);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 0);
+}
+
 }  // namespace
 }  // namespace boxtree

@@ -111,8 +111,9 @@ constexpr int kScratchContacts = 48;
 // the shape over the triangle is a vertex of shape-within-prism, which is a shape vertex inside
 // the prism, a shape edge crossing a prism wall, or a prism edge (the line through a triangle
 // corner along N) crossing the shape's boundary: all three kinds are generated, so the deepest
-// contact is exactly the directional penetration depth along N. Contacts with depth < least_depth
-// are left out; the others come in the same order as with no such bound (-kInf).
+// contact is exactly the directional penetration depth along N (when there are more than
+// kScratchContacts, the deepest are kept). Contacts with depth < least_depth are left out; the
+// others come in the same order as with no such bound (-kInf) while the scratch has room.
 int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, const Vec3& normal, Real slack,
                            Real least_depth, ContactPoint* out) {
   int count = 0;
@@ -126,10 +127,20 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     return true;
   };
   const auto depth_of = [&](const Vec3& x) { return plane - normal.dot(x); };
-  const auto add = [&](const Vec3& x, Real depth) {
-    if (count >= kScratchContacts) return;
-    out[count++] = make_contact(x + depth * normal, normal, depth);
+  // Into `out` while there is room; once it is full (a shape of many corners deep in the prism),
+  // in place of the shallowest if deeper, so that the deepest are kept whatever order they come in.
+  const auto keep = [&](const ContactPoint& contact) {
+    if (count < kScratchContacts) {
+      out[count++] = contact;
+      return;
+    }
+    int shallowest = 0;
+    for (int i = 1; i < count; ++i) {
+      if (out[i].depth < out[shallowest].depth) shallowest = i;
+    }
+    if (contact.depth > out[shallowest].depth) out[shallowest] = contact;
   };
+  const auto add = [&](const Vec3& x, Real depth) { keep(make_contact(x + depth * normal, normal, depth)); };
   // The corners' signed distances to the walls, worked out once (up to kCachedCorners corners):
   // every corner is on three or more edges, which read the same values. With them, bit i of
   // below[v] (above[v]) is whether corner v is strictly on the outer (inner) side of wall i.
@@ -203,8 +214,8 @@ int triangle_face_contacts(const Polytope& shape, const TriangleFrame& tri, cons
     }
   }
   for (int j = 0; j < 3 && shape.bound_count > 0; ++j) {
-    if (t_lo[j] <= t_hi[j] + slack && std::isfinite(t_hi[j]) && !(t_hi[j] < least_depth) && count < kScratchContacts) {
-      out[count++] = make_contact(tri.v[j], normal, t_hi[j]);
+    if (t_lo[j] <= t_hi[j] + slack && std::isfinite(t_hi[j]) && !(t_hi[j] < least_depth)) {
+      keep(make_contact(tri.v[j], normal, t_hi[j]));
     }
   }
   return count;
