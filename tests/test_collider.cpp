@@ -183,12 +183,10 @@ TEST(Collider, ConvexShapesMatchPerFacetBruteForce) {
       for (Vec3& p : cube_corners) p *= 0.5 * s;
       const ConvexPolyhedron small = make_convex_polyhedron(cube_corners, cube_faces);
       collide_convex(mesh, PlacedPolyhedron{small, place, rounding}, request, result);
-      ConvexPolyhedron placed;
-      transform_polyhedron(small, place, placed);
       check("polyhedron", [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         ContactOptions grown = o;
         grown.margin += rounding;
-        const int n = contact_polyhedron_triangle(placed, a, b, c, grown, out);
+        const int n = contact_polyhedron_triangle(small, place, a, b, c, grown, out);
         for (int i = 0; i < n; ++i) out[i].depth += rounding;
         return n;
       });

@@ -536,5 +536,77 @@ TEST(ContactPolyhedron, AHullDeepUnderAWideTriangleKeepsItsDeepestCorner) {
   EXPECT_GT(checked, 0);
 }
 
+// The placed form (the triangle taken into the polyhedron's frame, the contacts brought back)
+// against the polyhedron moved into the triangle's frame: the same contacts to rounding, for
+// proper rotations and for reflections (whose reference is the mirrored point set's own hull,
+// moved by the rotation that is left). Where two axes tie, rounding may pick either: the least
+// penetration (the first depth) still agrees, and such cases must stay rare.
+TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
+  test::Random rng(78);
+  int compared = 0;
+  int contacts = 0;
+  int differing = 0;
+  int mirrored_contacts = 0;
+  ConvexPolyhedron moved;
+  for (int hull_index = 0; hull_index < scaled(24); ++hull_index) {
+    const Vec3 stretch = test::vec3_z_first([&] { return rng.uniform(0.2, 0.6); });
+    std::vector<Vec3> points;
+    const int count = 8 << (hull_index % 4);  // 8 to 64
+    for (int i = 0; i < count; ++i) points.push_back(rng.unit_vector().cwiseProduct(stretch));
+    const ConvexPolyhedron hull = make_convex_polyhedron(points, brute_force_hull(points));
+    std::vector<Vec3> mirrored_points = points;
+    for (Vec3& p : mirrored_points) p.z() = -p.z();
+    const ConvexPolyhedron mirrored_hull = make_convex_polyhedron(mirrored_points, brute_force_hull(mirrored_points));
+    for (int pose_index = 0; pose_index < 20; ++pose_index) {
+      const Mat3 turn = rng.rotation();
+      const Vec3 offset = rng.point(-20, 20);
+      const bool mirrored = pose_index % 2 == 1;
+      // Mirrored: x -> turn * diag(1, 1, -1) * x, the mirrored hull turned.
+      RigidTransform place{turn, offset};
+      if (mirrored) place.rotation.col(2) = -place.rotation.col(2);
+      transform_polyhedron(mirrored ? mirrored_hull : hull, {turn, offset}, moved);
+      for (int trial = 0; trial < 100; ++trial) {
+        std::array<Vec3, 3> t;
+        if (trial % 2 == 0) {
+          for (Vec3& corner : t) corner = offset + rng.point(-0.7, 0.7);
+        } else {
+          const Real height = rng.uniform(-0.8, 0.2);
+          const Vec3 base = offset + Vec3(0, 0, height);
+          const Real tilt_x = rng.uniform(-0.3, 0.3);
+          const Real tilt_y = rng.uniform(-0.3, 0.3);
+          t = {base + Vec3(-1, -1, -tilt_x - tilt_y), base + Vec3(1, -1, tilt_x - tilt_y),
+               base + Vec3(0, 1.5, 1.5 * tilt_y)};
+          if (trial % 4 == 3) std::swap(t[1], t[2]);
+        }
+        ContactOptions options;
+        if (trial % 3 == 1) options.margin = 0.05;
+        if (trial % 5 != 2) options.two_sided = false;
+        ContactPoint got[kMaxPolyhedronTriangleContacts];
+        ContactPoint want[kMaxPolyhedronTriangleContacts];
+        const int n = contact_polyhedron_triangle(hull, place, t[0], t[1], t[2], options, got);
+        const int m = contact_polyhedron_triangle(moved, t[0], t[1], t[2], options, want);
+        ++compared;
+        contacts += m;
+        if (mirrored) mirrored_contacts += m;
+        bool same = n == m;
+        for (int i = 0; same && i < n; ++i) {
+          same = std::abs(got[i].depth - want[i].depth) <= 1e-9 && (got[i].position - want[i].position).norm() <= 1e-9 &&
+                 (got[i].normal - want[i].normal).norm() <= 1e-9;
+        }
+        if (same) continue;
+        ++differing;
+        SCOPED_TRACE(testing::Message() << hull_index << " " << pose_index << " " << trial);
+        ASSERT_EQ(n > 0, m > 0);
+        if (n > 0) {
+          EXPECT_NEAR(got[0].depth, want[0].depth, 1e-9);
+        }
+      }
+    }
+  }
+  EXPECT_GT(contacts, compared / 4);          // most cases touch
+  EXPECT_GT(mirrored_contacts, contacts / 4);  // reflections among them
+  EXPECT_LE(differing, compared / 1000) << differing << " of " << compared;
+}
+
 }  // namespace
 }  // namespace boxtree

@@ -227,24 +227,18 @@ void collide_shape(const CollisionMesh& mesh, const PlacedPolyhedron& hull, cons
   }
   ContactOptions options = options_for(mesh, request, result);
   options.margin += hull.rounding;
-  // Moved into the mesh's frame once per call, at its first candidate facet (a falling hull's
-  // calls mostly have none, and the move was a quarter of their time for hulls of 64 points),
-  // into per-thread storage (no allocation once warm).
-  thread_local ConvexPolyhedron placed;
-  bool is_placed = false;
   // The exact triangle test of the hull's box (its frame taken once per query, its face axes
   // first) is cheaper per leaf than the leaf boxes' 15-axis test against it, and passes fewer
   // facets to the narrowphase (in the drop scene 27.9 instead of 37.1 per call): every facet
   // within the margin of the hull meets its box grown by the margin.
   const Obb query = placed_box(hull.local.vertices, hull.mesh_from_local, hull.rounding + request.margin);
+  // Each candidate triangle is taken into the hull's frame: three corners instead of the hull's
+  // every vertex, face plane and edge (bench/RESULTS.md: ODE's hulls of 64 points on rough
+  // terrain took 14-22% fewer instructions per call than with the hull moved once per call).
   run_pipeline<kMaxPolyhedronTriangleContacts>(
       mesh, query, FacetTest::exact_triangle, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
-        if (!is_placed) {
-          transform_polyhedron(hull.local, hull.mesh_from_local, placed);
-          is_placed = true;
-        }
-        const int n = contact_polyhedron_triangle(placed, a, b, c, o, out);
+        const int n = contact_polyhedron_triangle(hull.local, hull.mesh_from_local, a, b, c, o, out);
         for (int i = 0; i < n; ++i) out[i].depth += hull.rounding;
         return n;
       });

@@ -791,6 +791,24 @@ int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& 
                            kMaxPolyhedronTriangleContacts, out);
 }
 
+int contact_polyhedron_triangle(const ConvexPolyhedron& local, const RigidTransform& mesh_from_local, const Vec3& a,
+                                const Vec3& b, const Vec3& c, const ContactOptions& options, ContactPoint* out) {
+  const Mat3& r = mesh_from_local.rotation;
+  const Vec3& t = mesh_from_local.translation;
+  const Mat3 local_from_mesh = r.transpose();
+  const Vec3 la = local_from_mesh * (a - t);
+  const Vec3 lb = local_from_mesh * (b - t);
+  const Vec3 lc = local_from_mesh * (c - t);
+  // A reflection reverses the winding, so the corners trade places to keep the triangle's front.
+  const bool mirrored = r.determinant() < 0;
+  const int n = contact_polyhedron_triangle(local, la, mirrored ? lc : lb, mirrored ? lb : lc, options, out);
+  for (int i = 0; i < n; ++i) {
+    out[i].position = r * out[i].position + t;
+    out[i].normal = r * out[i].normal;
+  }
+  return n;
+}
+
 int contact_triangle_triangle(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                               const Vec3& b2, const ContactOptions& options, ContactPoint* out) {
   if (!finite(a0, a1, a2) || !finite(b0, b1, b2)) return 0;

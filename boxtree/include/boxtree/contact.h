@@ -89,6 +89,14 @@ int contact_box_triangle(const Obb& box, const Vec3& a, const Vec3& b, const Vec
 // the support mapping can be the cheaper route (bench/RESULTS.md, narrowphase notes).
 int contact_polyhedron_triangle(const ConvexPolyhedron& polyhedron, const Vec3& a, const Vec3& b, const Vec3& c,
                                 const ContactOptions& options, ContactPoint* out);
+// The same for the polyhedron placed by `mesh_from_local` (an orthogonal rotation, a reflection
+// too, and a translation) against a triangle in the mesh's frame: the triangle is taken into the
+// polyhedron's frame and the contacts are brought back, so the polyhedron is never moved (three
+// corners per triangle instead of every vertex, face plane and edge of the polyhedron per call).
+// The contacts are those of the polyhedron moved by transform_polyhedron, up to rounding (where
+// two axes tie, rounding may pick the other one, as it may in any frame).
+int contact_polyhedron_triangle(const ConvexPolyhedron& local, const RigidTransform& mesh_from_local, const Vec3& a,
+                                const Vec3& b, const Vec3& c, const ContactOptions& options, ContactPoint* out);
 
 // A convex shape given by its support mapping: the point of the shape farthest along `direction`
 // (direction is not normalized). `center` is any interior point (used to start the search and to
