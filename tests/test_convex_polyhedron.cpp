@@ -590,8 +590,8 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
         if (mirrored) mirrored_contacts += m;
         bool same = n == m;
         for (int i = 0; same && i < n; ++i) {
-          same = std::abs(got[i].depth - want[i].depth) <= 1e-9 && (got[i].position - want[i].position).norm() <= 1e-9 &&
-                 (got[i].normal - want[i].normal).norm() <= 1e-9;
+          same = std::abs(got[i].depth - want[i].depth) <= 1e-9 &&
+                 (got[i].position - want[i].position).norm() <= 1e-9 && (got[i].normal - want[i].normal).norm() <= 1e-9;
         }
         if (same) continue;
         ++differing;
@@ -603,7 +603,7 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
       }
     }
   }
-  EXPECT_GT(contacts, compared / 4);          // most cases touch
+  EXPECT_GT(contacts, compared / 4);           // most cases touch
   EXPECT_GT(mirrored_contacts, contacts / 4);  // reflections among them
   EXPECT_LE(differing, compared / 1000) << differing << " of " << compared;
 }
