@@ -539,7 +539,7 @@ TEST(ContactPolyhedron, AHullDeepUnderAWideTriangleKeepsItsDeepestCorner) {
 // The placed form (the triangle taken into the polyhedron's frame, the contacts brought back)
 // against the polyhedron moved into the triangle's frame: the same contacts to rounding, for
 // proper rotations and for reflections (whose reference is the mirrored point set's own hull,
-// moved by the rotation that is left). Where two axes tie, rounding may pick either: the least
+// moved by the rotation that is left; transform_polyhedron's reflection is held to it too). Where two axes tie, rounding may pick either: the least
 // penetration (the first depth) still agrees, and such cases must stay rare.
 TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
   test::Random rng(78);
@@ -548,6 +548,7 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
   int differing = 0;
   int mirrored_contacts = 0;
   ConvexPolyhedron moved;
+  ConvexPolyhedron reflected;
   for (int hull_index = 0; hull_index < scaled(24); ++hull_index) {
     const Vec3 stretch = test::vec3_z_first([&] { return rng.uniform(0.2, 0.6); });
     std::vector<Vec3> points;
@@ -565,6 +566,7 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
       RigidTransform place{turn, offset};
       if (mirrored) place.rotation.col(2) = -place.rotation.col(2);
       transform_polyhedron(mirrored ? mirrored_hull : hull, {turn, offset}, moved);
+      if (mirrored) transform_polyhedron(hull, place, reflected);
       for (int trial = 0; trial < 100; ++trial) {
         std::array<Vec3, 3> t;
         if (trial % 2 == 0) {
@@ -585,6 +587,18 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
         ContactPoint want[kMaxPolyhedronTriangleContacts];
         const int n = contact_polyhedron_triangle(hull, place, t[0], t[1], t[2], options, got);
         const int m = contact_polyhedron_triangle(moved, t[0], t[1], t[2], options, want);
+        if (mirrored) {
+          // transform_polyhedron's reflection (the polyhedron made anew) against the same reference.
+          ContactPoint direct[kMaxPolyhedronTriangleContacts];
+          const int k = contact_polyhedron_triangle(reflected, t[0], t[1], t[2], options, direct);
+          bool agree = k == m;
+          for (int i = 0; agree && i < k; ++i) {
+            agree = std::abs(direct[i].depth - want[i].depth) <= 1e-9 &&
+                    (direct[i].position - want[i].position).norm() <= 1e-9 &&
+                    (direct[i].normal - want[i].normal).norm() <= 1e-9;
+          }
+          if (!agree) ++differing;
+        }
         ++compared;
         contacts += m;
         if (mirrored) mirrored_contacts += m;

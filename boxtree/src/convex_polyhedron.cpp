@@ -168,6 +168,18 @@ ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const s
 void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& transform, ConvexPolyhedron& out) {
   const Mat3& r = transform.rotation;
   const Vec3& t = transform.translation;
+  if (r.determinant() < 0) {
+    // A reflection turns every face's loop clockwise seen from outside, which the sides and edge
+    // cones below are built on: the mirrored polyhedron is made anew from its moved corners
+    // (make_convex_polyhedron takes either winding).
+    std::vector<Vec3> points(in.vertices.size());
+    for (std::size_t i = 0; i < in.vertices.size(); ++i) points[i] = r * in.vertices[i] + t;
+    std::vector<std::vector<int>> faces(in.faces.size());
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      faces[f].assign(in.loops.begin() + in.face_begin[f], in.loops.begin() + in.face_begin[f + 1]);
+    out = make_convex_polyhedron(points, faces);
+    return;
+  }
   out.vertices.resize(in.vertices.size());
   for (std::size_t i = 0; i < in.vertices.size(); ++i) out.vertices[i] = r * in.vertices[i] + t;
   // A plane n . x = d moves to (r n) . x = d + (r n) . t.

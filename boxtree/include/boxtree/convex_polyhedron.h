@@ -66,9 +66,10 @@ struct ConvexPolyhedron {
 constexpr int kMaxPolyhedronFaceCorners = 64;
 ConvexPolyhedron make_convex_polyhedron(const std::vector<Vec3>& points, const std::vector<std::vector<int>>& faces);
 
-// `out` = `in` moved by `transform` (x -> rotation * x + translation; rotation orthonormal).
-// Reuses out's storage, so that a collider can move a hull into a mesh's frame once per call
-// without allocating.
+// `out` = `in` moved by `transform` (x -> rotation * x + translation; rotation orthonormal, a
+// reflection too). Reuses out's storage (no allocation once warm), except for a reflection,
+// which makes the polyhedron anew. (A hull against many triangles needs no move at all: the
+// placed contact_polyhedron_triangle of contact.h takes the triangles into the hull's frame.)
 void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& transform, ConvexPolyhedron& out);
 
 // Fills vertex_columns, face_columns and edge_columns from the other fields (for a polyhedron
