@@ -539,8 +539,9 @@ TEST(ContactPolyhedron, AHullDeepUnderAWideTriangleKeepsItsDeepestCorner) {
 // The placed form (the triangle taken into the polyhedron's frame, the contacts brought back)
 // against the polyhedron moved into the triangle's frame: the same contacts to rounding, for
 // proper rotations and for reflections (whose reference is the mirrored point set's own hull,
-// moved by the rotation that is left; transform_polyhedron's reflection is held to it too). Where two axes tie, rounding may pick either: the least
-// penetration (the first depth) still agrees, and such cases must stay rare.
+// moved by the rotation that is left; transform_polyhedron's reflection is held to it too).
+// Where two axes tie, rounding may pick either: the least penetration (the first depth) still
+// agrees, and such cases must stay rare.
 TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
   test::Random rng(78);
   int compared = 0;
