@@ -413,6 +413,24 @@ TEST(ContactPolyhedron, FaceRestingOnATriangleGivesItsCorners) {
   EXPECT_EQ(contact_polyhedron_triangle(moved, Vec3(std::nan(""), 0, 0), floor[1], floor[2], {}, c), 0);
 }
 
+// A test triangle near a hull of size ~1 placed at `offset`: even trials three random corners
+// around it, odd ones a wide facet under it, tilted, its height across the hull's bottom (every
+// fourth wound the other way).
+std::array<Vec3, 3> triangle_near(test::Random& rng, const Vec3& offset, int trial) {
+  std::array<Vec3, 3> t;
+  if (trial % 2 == 0) {
+    for (Vec3& corner : t) corner = offset + rng.point(-0.7, 0.7);
+    return t;
+  }
+  const Real height = rng.uniform(-0.8, 0.2);
+  const Vec3 base = offset + Vec3(0, 0, height);
+  const Real tilt_x = rng.uniform(-0.3, 0.3);
+  const Real tilt_y = rng.uniform(-0.3, 0.3);
+  t = {base + Vec3(-1, -1, -tilt_x - tilt_y), base + Vec3(1, -1, tilt_x - tilt_y), base + Vec3(0, 1.5, 1.5 * tilt_y)};
+  if (trial % 4 == 3) std::swap(t[1], t[2]);
+  return t;
+}
+
 // The narrowphase reads a polyhedron's corners, faces and edge cones by column (vertex_columns,
 // face_columns, edge_columns) when they are there, and falls back to the per-corner, per-face and
 // per-edge loops over the other fields when they are not: both must give the same contacts to
@@ -466,19 +484,7 @@ TEST(ContactPolyhedron, ColumnsGiveTheSameContactsAsThePerElementLoops) {
       by_element.face_columns.clear();
       by_element.edge_columns.clear();
       for (int trial = 0; trial < 100; ++trial) {
-        std::array<Vec3, 3> t;
-        if (trial % 2 == 0) {
-          for (Vec3& corner : t) corner = offset + rng.point(-0.7, 0.7);
-        } else {
-          // A wide facet under the hull, tilted, its height across the hull's bottom.
-          const Real height = rng.uniform(-0.8, 0.2);
-          const Vec3 base = offset + Vec3(0, 0, height);
-          const Real tilt_x = rng.uniform(-0.3, 0.3);
-          const Real tilt_y = rng.uniform(-0.3, 0.3);
-          t = {base + Vec3(-1, -1, -tilt_x - tilt_y), base + Vec3(1, -1, tilt_x - tilt_y),
-               base + Vec3(0, 1.5, 1.5 * tilt_y)};
-          if (trial % 4 == 3) std::swap(t[1], t[2]);
-        }
+        const std::array<Vec3, 3> t = triangle_near(rng, offset, trial);
         ContactOptions options;
         if (trial % 3 == 1) options.margin = 0.05;
         if (trial % 5 == 2) options.two_sided = false;
@@ -548,6 +554,15 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
   int contacts = 0;
   int differing = 0;
   int mirrored_contacts = 0;
+  // The same contacts in the same order, to 1e-9.
+  const auto agree = [](const ContactPoint* x, int nx, const ContactPoint* y, int ny) {
+    for (int i = 0; nx == ny && i < nx; ++i) {
+      if (!(std::abs(x[i].depth - y[i].depth) <= 1e-9 && (x[i].position - y[i].position).norm() <= 1e-9 &&
+            (x[i].normal - y[i].normal).norm() <= 1e-9))
+        return false;
+    }
+    return nx == ny;
+  };
   ConvexPolyhedron moved;
   ConvexPolyhedron reflected;
   for (int hull_index = 0; hull_index < scaled(24); ++hull_index) {
@@ -569,18 +584,7 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
       transform_polyhedron(mirrored ? mirrored_hull : hull, {turn, offset}, moved);
       if (mirrored) transform_polyhedron(hull, place, reflected);
       for (int trial = 0; trial < 100; ++trial) {
-        std::array<Vec3, 3> t;
-        if (trial % 2 == 0) {
-          for (Vec3& corner : t) corner = offset + rng.point(-0.7, 0.7);
-        } else {
-          const Real height = rng.uniform(-0.8, 0.2);
-          const Vec3 base = offset + Vec3(0, 0, height);
-          const Real tilt_x = rng.uniform(-0.3, 0.3);
-          const Real tilt_y = rng.uniform(-0.3, 0.3);
-          t = {base + Vec3(-1, -1, -tilt_x - tilt_y), base + Vec3(1, -1, tilt_x - tilt_y),
-               base + Vec3(0, 1.5, 1.5 * tilt_y)};
-          if (trial % 4 == 3) std::swap(t[1], t[2]);
-        }
+        const std::array<Vec3, 3> t = triangle_near(rng, offset, trial);
         ContactOptions options;
         if (trial % 3 == 1) options.margin = 0.05;
         if (trial % 5 != 2) options.two_sided = false;
@@ -592,23 +596,12 @@ TEST(ContactPolyhedron, PlacedGivesTheContactsOfTheMovedPolyhedron) {
           // transform_polyhedron's reflection (the polyhedron made anew) against the same reference.
           ContactPoint direct[kMaxPolyhedronTriangleContacts];
           const int k = contact_polyhedron_triangle(reflected, t[0], t[1], t[2], options, direct);
-          bool agree = k == m;
-          for (int i = 0; agree && i < k; ++i) {
-            agree = std::abs(direct[i].depth - want[i].depth) <= 1e-9 &&
-                    (direct[i].position - want[i].position).norm() <= 1e-9 &&
-                    (direct[i].normal - want[i].normal).norm() <= 1e-9;
-          }
-          if (!agree) ++differing;
+          if (!agree(direct, k, want, m)) ++differing;
         }
         ++compared;
         contacts += m;
         if (mirrored) mirrored_contacts += m;
-        bool same = n == m;
-        for (int i = 0; same && i < n; ++i) {
-          same = std::abs(got[i].depth - want[i].depth) <= 1e-9 &&
-                 (got[i].position - want[i].position).norm() <= 1e-9 && (got[i].normal - want[i].normal).norm() <= 1e-9;
-        }
-        if (same) continue;
+        if (agree(got, n, want, m)) continue;
         ++differing;
         SCOPED_TRACE(testing::Message() << hull_index << " " << pose_index << " " << trial);
         ASSERT_EQ(n > 0, m > 0);
