@@ -53,6 +53,12 @@ ContactRequest request_for(const GeomObject& object, const ContactArray& out, Re
   return request;
 }
 
+// `value` added to a geom's counter. Each atomic add is a locked instruction, ~20 cycles: seven
+// of them were 7% of a sphere's call on flat terrain (pair_replay), so zeros are not added.
+void add(std::atomic<std::uint64_t>& counter, std::uint64_t value) {
+  if (value != 0) counter.fetch_add(value, std::memory_order_relaxed);
+}
+
 // The result into ODE's array, in world coordinates and ODE's convention.
 int write_contacts(GeomObject& object, const ContactArray& out, const RigidTransform& world_from_mesh,
                    const ContactResult& result, bool has_other_facet) {
@@ -74,13 +80,13 @@ int write_contacts(GeomObject& object, const ContactArray& out, const RigidTrans
     g->side1 = int(c.facet);
     g->side2 = has_other_facet ? int(c.other_facet) : -1;
   }
-  object.calls.fetch_add(1, std::memory_order_relaxed);
-  object.candidate_facets.fetch_add(result.counts.candidates, std::memory_order_relaxed);
-  object.merged.fetch_add(result.counts.merged, std::memory_order_relaxed);
-  object.dropped.fetch_add(result.counts.dropped, std::memory_order_relaxed);
-  object.mesh_volume_tests.fetch_add(result.counts.volume_tests, std::memory_order_relaxed);
-  if (result.counts.reused) object.reused.fetch_add(1, std::memory_order_relaxed);
-  object.contacts.fetch_add(std::uint64_t(count), std::memory_order_relaxed);
+  add(object.calls, 1);
+  add(object.candidate_facets, result.counts.candidates);
+  add(object.merged, result.counts.merged);
+  add(object.dropped, result.counts.dropped);
+  add(object.mesh_volume_tests, result.counts.volume_tests);
+  add(object.reused, result.counts.reused ? 1 : 0);
+  add(object.contacts, std::uint64_t(count));
   return count;
 }
 
