@@ -95,7 +95,9 @@ InternalEdgeCorrection::InternalEdgeCorrection(const Vec3& a, const Vec3& b, con
     edges_[k] = *corners_[(k + 1) % 3] - *corners_[k];
     edge_squared_[k] = edges_[k].squaredNorm();
   }
-  scale_ = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  // The longest edge: sqrt is monotonic and correctly rounded, so this is the largest of the
+  // three lengths to the bit, for one square root instead of three.
+  scale_ = std::sqrt(std::max({edge_squared_[0], edge_squared_[1], edge_squared_[2]}));
   judged_ = true;
 }
 
