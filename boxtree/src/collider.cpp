@@ -516,28 +516,31 @@ void collide_convex(const CollisionMesh& mesh, const PlacedPoints& hull, const C
 namespace {
 
 // Whether the support shape and a facet are proved apart by more than `reach` (then no contact
-// can come from it), along one of two axes: the facet's normal (the shape wholly above or below
-// its plane), and the direction from the middle of the shape's box to the facet's closest point
-// (a distance search's first direction). The second separates most facets that are near a shape
+// can come from it), along one of two axes: the direction from the middle of the shape's box to
+// the facet's closest point (a distance search's first direction), and the facet's normal (the
+// shape wholly above or below its plane). The first separates most facets that are near a shape
 // but not under it, which the normal does not: around a hull resting on a rough terrain it
-// halved the facets left to an engine's GJK (Bullet, bench/RESULTS.md). It asks for a gap wider
-// than `reach` by a millionth of the sizes, so that a facet whose distance an iterative
-// narrowphase would put just within the reach is not dropped on rounding.
+// halved the facets left to an engine's GJK (Bullet, bench/RESULTS.md), and it is tried first
+// since it proves most of them (there 30.2k of 41.1k, against 10.9k by the normal), with one
+// support call instead of the normal's two. It asks for a gap wider than `reach` by a millionth
+// of the sizes, so that a facet whose distance an iterative narrowphase would put just within
+// the reach is not dropped on rounding.
 bool out_of_reach(const SupportShape& shape, const Vec3& a, const Vec3& b, const Vec3& c, Real reach) {
   const Vec3 normal = (b - a).cross(c - a);
   const Real length = normal.norm();
   if (!(length > 0)) return false;
-  const Vec3 n = normal / length;
-  const Real plane = n.dot(a);
-  if (n.dot(shape.support(-n)) - plane > reach) return true;
-  if (plane - n.dot(shape.support(n)) > reach) return true;
   const Vec3& middle = shape.bounds.center;
   const Vec3 toward = closest_point_on_triangle(middle, a, b, c) - middle;
   const Real distance = toward.norm();
-  if (!(distance > 0)) return false;
-  const Vec3 u = toward / distance;
-  const Real slack = 1e-6 * (distance + shape.bounds.half_extents.maxCoeff() + reach);
-  return std::min({u.dot(a), u.dot(b), u.dot(c)}) - u.dot(shape.support(u)) > reach + slack;
+  if (distance > 0) {
+    const Vec3 u = toward / distance;
+    const Real slack = 1e-6 * (distance + shape.bounds.half_extents.maxCoeff() + reach);
+    if (std::min({u.dot(a), u.dot(b), u.dot(c)}) - u.dot(shape.support(u)) > reach + slack) return true;
+  }
+  const Vec3 n = normal / length;
+  const Real plane = n.dot(a);
+  if (n.dot(shape.support(-n)) - plane > reach) return true;
+  return plane - n.dot(shape.support(n)) > reach;
 }
 
 bool valid_support(const SupportShape& shape, const ContactRequest& request) {
