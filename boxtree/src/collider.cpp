@@ -192,11 +192,12 @@ void collide_shape(const CollisionMesh& mesh, const Capsule& capsule, const Cont
   // The exact test is triangle_overlaps_capsule's on the grown capsule (valid: the walk reaches no
   // facet otherwise), and the closest pairs it computes are the narrowphase's.
   const Capsule query{capsule.p0, capsule.p1, capsule.radius + request.margin};
+  const detail::CapsuleAcross across(query);  // once per call, not per facet
   run_pipeline<kMaxCapsuleTriangleContacts>(
       mesh, query, FacetTest::none, request, options, result,
       [&](const Vec3& a, const Vec3& b, const Vec3& c, const ContactOptions& o, ContactPoint* out) {
         detail::SegmentTrianglePair boundary;
-        if (!detail::triangle_overlaps_capsule(a, b, c, query, boundary)) return -1;
+        if (!detail::triangle_overlaps_capsule(a, b, c, query, across, boundary)) return -1;
         return detail::contact_capsule_triangle_from(capsule, a, b, c, boundary, o, out);
       });
   reduce(request, result);

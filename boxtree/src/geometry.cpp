@@ -600,7 +600,8 @@ namespace {
 Real segment_triangle_distance_squared_until(const Vec3& p0, const Vec3& p1, const Vec3& a, const Vec3& b,
                                              const Vec3& c, Real enough);  // Distances, below
 
-bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule) {
+bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
+                                     const detail::CapsuleAcross& across) {
   const Vec3 e[3] = {b - a, c - b, a - c};
   const Vec3 n = e[0].cross(c - a);
   const Real n2 = n.squaredNorm();
@@ -626,17 +627,13 @@ bool capsule_beyond_a_triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c
   // The triangle seen along the core: its shadow out of the disk of the (enlarged) radius about
   // the core's line. This settles the facets beside a capsule lying on a surface, which the planes
   // above do not.
-  const Vec3 w = capsule.p1 - capsule.p0;
-  const Real length = w.norm();
-  if (!(length > 0)) return false;
-  Vec3 across0, across1;
-  detail::orthonormal_completion(w / length, across0, across1);
+  if (!across.valid) return false;
   Real x[3];
   Real y[3];
   for (int i = 0; i < 3; ++i) {
     const Vec3 d = *corner[i] - capsule.p0;
-    x[i] = across0.dot(d);
-    y[i] = across1.dot(d);
+    x[i] = across.u.dot(d);
+    y[i] = across.v.dot(d);
   }
   return detail::origin_beyond_triangle_2d(x, y, reach2);
 }
@@ -647,7 +644,7 @@ bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, cons
   // A NaN end would make every orientation test of segment_meets_triangle false, i.e. "meets";
   // d^2 <= r^2 alone would let a negative radius act as its magnitude.
   if (!is_valid(capsule)) return false;
-  if (capsule_beyond_a_triangle_plane(a, b, c, capsule)) return false;
+  if (capsule_beyond_a_triangle_plane(a, b, c, capsule, detail::CapsuleAcross(capsule))) return false;
   const Real r2 = capsule.radius * capsule.radius;
   return segment_triangle_distance_squared_until(capsule.p0, capsule.p1, a, b, c, r2) <= r2;
 }
@@ -699,9 +696,17 @@ detail::SegmentTrianglePair detail::closest_segment_triangle_boundary(const Vec3
   return BoundaryCandidates(p0, p1, a, b, c).first_closest(p0, p1);
 }
 
+detail::CapsuleAcross::CapsuleAcross(const Capsule& capsule) {
+  const Vec3 w = capsule.p1 - capsule.p0;
+  const Real length = w.norm();
+  if (!(length > 0)) return;
+  orthonormal_completion(w / length, u, v);
+  valid = true;
+}
+
 bool detail::triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
-                                       SegmentTrianglePair& boundary) {
-  if (capsule_beyond_a_triangle_plane(a, b, c, capsule)) return false;
+                                       const CapsuleAcross& across, SegmentTrianglePair& boundary) {
+  if (capsule_beyond_a_triangle_plane(a, b, c, capsule, across)) return false;
   // segment_triangle_distance_squared_until's distance is 0 (<= r^2 for a valid radius) when the
   // segment meets the triangle, else the running std::min of the five candidates' distances.
   // That minimum is NaN from the first distance on or never grows, so its early stops at a value

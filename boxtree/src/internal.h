@@ -76,8 +76,17 @@ SegmentTrianglePair closest_segment_triangle_boundary(const Vec3& p0, const Vec3
 // every input, bit for bit. When true, `boundary` is closest_segment_triangle_boundary(capsule.p0,
 // capsule.p1, a, b, c), computed on the way: a collider's leaf test hands it to the narrowphase
 // (contact_capsule_triangle_from). Defined in geometry.cpp.
+// The plane across a capsule's core, for the test of a triangle's shadow along the core: two
+// unit vectors orthogonal to the core and to each other (orthonormal_completion of its direction),
+// worked out once per capsule. `valid` is false for a core of no length (no shadow test).
+struct CapsuleAcross {
+  explicit CapsuleAcross(const Capsule& capsule);
+  Vec3 u = Vec3::Zero();
+  Vec3 v = Vec3::Zero();
+  bool valid = false;
+};
 bool triangle_overlaps_capsule(const Vec3& a, const Vec3& b, const Vec3& c, const Capsule& capsule,
-                               SegmentTrianglePair& boundary);
+                               const CapsuleAcross& across, SegmentTrianglePair& boundary);
 
 // One triangle of triangles_intersect as that test uses it, prepared once for the pairs that
 // share it (a leaf of one tree against the leaves of a subtree of the other): its bounding box and
