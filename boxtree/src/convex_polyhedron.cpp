@@ -210,63 +210,28 @@ void transform_polyhedron(const ConvexPolyhedron& in, const RigidTransform& tran
   update_columns(out);
 }
 
-// Copies (and the faces' negated normals and offsets, and one sum each) row by row through raw
-// pointers: with the vectors' own indexing the compiler reloads every array's bounds after each
-// store (it cannot tell that the rows do not overlap them), which made these loops half of the
-// cost of moving a hull into a mesh's frame.
 void update_columns(ConvexPolyhedron& p) {
   const std::size_t vertices = p.vertices.size();
   p.vertex_columns.resize(3 * vertices);
-  if (vertices > 0) {
-    const Vec3* corner = p.vertices.data();
-    Real* x = p.vertex_columns.data();
-    Real* y = x + vertices;
-    Real* z = y + vertices;
-    for (std::size_t i = 0; i < vertices; ++i) {
-      x[i] = corner[i][0];
-      y[i] = corner[i][1];
-      z[i] = corner[i][2];
-    }
+  for (std::size_t i = 0; i < vertices; ++i) {
+    for (int c = 0; c < 3; ++c) p.vertex_columns[c * vertices + i] = p.vertices[i][c];
   }
   const std::size_t faces = p.faces.size();
   p.face_columns.resize(5 * faces);
-  if (faces > 0) {
-    const Plane* plane = p.faces.data();
-    const Real* width = p.face_width.data();
-    const std::size_t widths = p.face_width.size();
-    Real* row[5];
-    for (int k = 0; k < 5; ++k) row[k] = p.face_columns.data() + k * faces;
-    for (std::size_t f = 0; f < faces; ++f) {
-      const Vec3 inward = -plane[f].normal;
-      row[0][f] = inward[0];
-      row[1][f] = inward[1];
-      row[2][f] = inward[2];
-      const Real lo = -plane[f].offset;
-      row[3][f] = lo;
-      row[4][f] = lo + (f < widths ? width[f] : Real(0));
-    }
+  for (std::size_t f = 0; f < faces; ++f) {
+    const Vec3 inward = -p.faces[f].normal;
+    for (int c = 0; c < 3; ++c) p.face_columns[c * faces + f] = inward[c];
+    const Real lo = -p.faces[f].offset;
+    p.face_columns[3 * faces + f] = lo;
+    p.face_columns[4 * faces + f] = lo + (f < p.face_width.size() ? p.face_width[f] : Real(0));
   }
   const std::size_t edges = p.edge_from.size();
   p.edge_columns.resize(12 * edges);
-  if (edges > 0) {
-    const Vec3* corner = p.vertices.data();
-    const int* from = p.edge_from.data();
-    const int* to = p.edge_to.data();
-    const Vec3* cone = p.edge_cone.data();
-    const std::size_t cones = p.edge_cone.size();
-    Real* row[12];
-    for (int k = 0; k < 12; ++k) row[k] = p.edge_columns.data() + k * edges;
-    for (std::size_t e = 0; e < edges; ++e) {
-      const Vec3 d = corner[to[e]] - corner[from[e]];
-      row[0][e] = d[0];
-      row[1][e] = d[1];
-      row[2][e] = d[2];
-      for (std::size_t k = 0; k < 3 && 3 * e + k < cones; ++k) {
-        const Vec3& v = cone[3 * e + k];
-        row[3 + 3 * k][e] = v[0];
-        row[4 + 3 * k][e] = v[1];
-        row[5 + 3 * k][e] = v[2];
-      }
+  for (std::size_t e = 0; e < edges; ++e) {
+    const Vec3 d = p.vertices[p.edge_to[e]] - p.vertices[p.edge_from[e]];
+    for (int c = 0; c < 3; ++c) p.edge_columns[c * edges + e] = d[c];
+    for (int k = 0; k < 3 && 3 * e + k < p.edge_cone.size(); ++k) {
+      for (int c = 0; c < 3; ++c) p.edge_columns[(3 + 3 * k + c) * edges + e] = p.edge_cone[3 * e + k][c];
     }
   }
 }
